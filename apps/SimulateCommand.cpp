@@ -1,0 +1,180 @@
+// `groundslam simulate OUT`: renders a sequence with exact ground truth in the HD Ground format.
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <memory>
+#include <sstream>
+
+#include <opencv2/imgcodecs.hpp>
+
+#include "Commands.hpp"
+#include "Progress.hpp"
+#include "groundslam/io/ConfigYaml.hpp"
+#include "groundslam/io/Dataset.hpp"
+#include "groundslam/io/Files.hpp"
+#include "groundslam/io/InputError.hpp"
+#include "groundslam/io/Tum.hpp"
+#include "groundslam/sim/Simulator.hpp"
+
+namespace fs = std::filesystem;
+
+namespace groundslam::apps {
+namespace {
+
+struct SimulateOptions {
+  std::string out_dir;
+  std::string name = "sequence";
+  std::string texture_image;
+  std::string path_kind = "loop";
+  std::string resolution = "320x240";
+  std::vector<double> distortion;
+  double fx = 0.0, fy = 0.0, cx = 0.0, cy = 0.0;
+  double turn_deg = sim::PathSettings{}.max_turn_rad * 180.0 / M_PI;
+  sim::SimulationSettings settings;
+};
+
+cv::Size parseResolution(const std::string& text) {
+  int w = 0, h = 0;
+  char x = 0;
+  std::istringstream in(text);
+  if (!(in >> w >> x >> h) || x != 'x' || w < 16 || h < 16 || w > 8000 || h > 8000) {
+    throw InputError("--resolution: expected WIDTHxHEIGHT (e.g. 1600x1200), got '" + text + "'");
+  }
+  return {w, h};
+}
+
+sim::SimulationSettings resolveSettings(SimulateOptions& o) {
+  sim::SimulationSettings s = o.settings;
+  const cv::Size size = parseResolution(o.resolution);
+  s.camera = sim::scaledHdGroundIntrinsics(size.width, size.height);
+  if (o.fx > 0) s.camera.fx = o.fx;
+  if (o.fy > 0) s.camera.fy = o.fy;
+  if (o.cx > 0) s.camera.cx = o.cx;
+  if (o.cy > 0) s.camera.cy = o.cy;
+  if (!o.distortion.empty()) {
+    if (o.distortion.size() != 5) throw InputError("--distortion: expected 5 numbers k1 k2 p1 p2 k3");
+    std::copy(o.distortion.begin(), o.distortion.end(), s.camera.distortion.begin());
+  }
+  if (!sim::parsePathKind(o.path_kind, s.path.kind)) throw InputError("--path: unknown path '" + o.path_kind + "'");
+  s.path.max_turn_rad = o.turn_deg * M_PI / 180.0;
+  if (s.path.lane_spacing_m <= 0.0) {
+    // Lanes overlap by 40% of the footprint's short side, so the robot revisits ground in the opposite heading.
+    s.path.lane_spacing_m = 0.6 * s.mounting_height_m * s.camera.height / s.camera.fy;
+  }
+  return s;
+}
+
+std::string describe(const sim::SimulationSettings& s, const SimulateOptions& o) {
+  std::ostringstream out;
+  out << "# groundslam simulate: the settings that produced this sequence\n"
+      << "texture: " << (o.texture_image.empty() ? s.texture_kind : o.texture_image) << "\n"
+      << "user_texture_width_m: " << s.user_texture_width_m << "\n"
+      << "path: " << sim::pathKindName(s.path.kind) << "\nframes: " << s.path.frames << "\nstep_m: " << s.path.step_m
+      << "\nmax_turn_deg: " << o.turn_deg << "\nlaps: " << s.path.laps << "\nlane_length_m: " << s.path.lane_length_m
+      << "\nlane_spacing_m: " << s.path.lane_spacing_m << "\narea_m: " << s.path.area_m
+      << "\nresolution: " << s.camera.width << "x" << s.camera.height << "\nmounting_height_m: " << s.mounting_height_m
+      << "\nmount_jitter_deg: " << s.mount_jitter_deg << "\nmotion_blur: " << s.motion_blur
+      << "\nwet_after: " << s.wet_after << "\nnoise_sigma: " << s.photometry.noise_sigma
+      << "\ndefocus_sigma_px: " << s.photometry.defocus_sigma_px
+      << "\nexposure_variation: " << s.photometry.exposure_variation << "\nvignetting: " << s.photometry.vignetting
+      << "\nseed: " << s.seed << "\n";
+  return out.str();
+}
+
+Config cameraConfig(const sim::SimulationSettings& s) {
+  Config config;
+  config.camera.image_width = s.camera.width;
+  config.camera.image_height = s.camera.height;
+  config.camera.fx = s.camera.fx;
+  config.camera.fy = s.camera.fy;
+  config.camera.cx = s.camera.cx;
+  config.camera.cy = s.camera.cy;
+  config.camera.distortion = s.camera.distortion;
+  config.camera.mounting_height_m = s.mounting_height_m;
+  return config;
+}
+
+void simulate(SimulateOptions& o) {
+  const sim::SimulationSettings settings = resolveSettings(o);
+  cv::Mat user_texture;
+  if (!o.texture_image.empty()) {
+    user_texture = cv::imread(o.texture_image, cv::IMREAD_GRAYSCALE);
+    if (user_texture.empty()) throw InputError(o.texture_image + ": texture image not found or does not decode");
+  }
+  const sim::SequenceSimulator simulator(settings, user_texture);
+  fs::create_directories(fs::path(o.out_dir) / "images");
+
+  const Config config = cameraConfig(settings);
+  const double meters_per_pixel = settings.mounting_height_m / settings.camera.fx;
+  std::vector<std::string> images;
+  std::vector<Eigen::Matrix3d> homographies;
+  std::vector<StampedPose> groundtruth;
+  Progress progress("simulate", simulator.frameCount());
+  for (int i = 0; i < simulator.frameCount(); ++i) {
+    char name[32];
+    std::snprintf(name, sizeof(name), "images/%06d.png", i);
+    const std::string path = (fs::path(o.out_dir) / name).string();
+    if (!cv::imwrite(path, simulator.renderFrame(i))) throw InputError(path + ": cannot write image");
+    const Pose2& pose = simulator.groundTruth()[static_cast<size_t>(i)];
+    images.push_back(name);
+    homographies.push_back(mapHomographyFromRobotPose(pose, settings.camera, meters_per_pixel));
+    groundtruth.push_back({static_cast<double>(i), pose});
+    progress.update(i + 1);
+  }
+  progress.finish();
+  writeFileAtomically((fs::path(o.out_dir) / "camera.yaml").string(), configToYaml(config, {"camera", "dataset"}));
+  writeTum((fs::path(o.out_dir) / "groundtruth.tum").string(), groundtruth);
+  writeFileAtomically((fs::path(o.out_dir) / "simulation.yaml").string(), describe(settings, o));
+  // The list goes last: a sequence without its list is visibly incomplete.
+  const std::string list = (fs::path(o.out_dir) / (o.name + ".txt")).string();
+  writeFileAtomically(list, formatHdGroundList(images, homographies));
+  std::cout << "simulated " << simulator.frameCount() << " frames (" << o.settings.texture_kind << ", "
+            << o.path_kind << ") -> " << list << "\n";
+}
+
+}  // namespace
+
+void addSimulateCommand(CLI::App& app) {
+  auto o = std::make_shared<SimulateOptions>();
+  CLI::App* cmd = app.add_subcommand("simulate", "Render a ground-texture sequence with exact ground truth (HD Ground format)");
+  cmd->add_option("OUT", o->out_dir, "Output folder")->required();
+  cmd->add_option("--name", o->name, "Name of the list file (NAME.txt)")->capture_default_str();
+  cmd->add_option("--texture-kind", o->settings.texture_kind, "Procedural ground texture")
+      ->check(CLI::IsMember(sim::textureKindNames()))->capture_default_str();
+  cmd->add_option("--texture", o->texture_image, "Use this image as the ground instead")->check(CLI::ExistingFile);
+  cmd->add_option("--texture-width-m", o->settings.user_texture_width_m, "Metric width of --texture")
+      ->check(CLI::PositiveNumber)->capture_default_str();
+  cmd->add_option("--path", o->path_kind, "Path shape")->check(CLI::IsMember(sim::pathKindNames()))->capture_default_str();
+  cmd->add_option("--frames", o->settings.path.frames, "Number of frames")->check(CLI::Range(2, 1000000))->capture_default_str();
+  cmd->add_option("--step-m", o->settings.path.step_m, "Distance between frames, metres")->check(CLI::PositiveNumber)->capture_default_str();
+  cmd->add_option("--turn-deg", o->turn_deg, "Largest heading change per frame (random walk), degrees")
+      ->check(CLI::Range(0.0, 90.0))->capture_default_str();
+  cmd->add_option("--laps", o->settings.path.laps, "Loop: times around")->check(CLI::Range(1, 1000))->capture_default_str();
+  cmd->add_option("--lane-length-m", o->settings.path.lane_length_m, "Lawnmower: lane length")->check(CLI::PositiveNumber)->capture_default_str();
+  cmd->add_option("--lane-spacing-m", o->settings.path.lane_spacing_m, "Lawnmower: lane spacing (0: 60% of the footprint)")
+      ->capture_default_str();
+  o->settings.path.lane_spacing_m = 0.0;
+  cmd->add_option("--area-m", o->settings.path.area_m, "Random walk: side of the area")->check(CLI::PositiveNumber)->capture_default_str();
+  cmd->add_option("--resolution", o->resolution, "Image size WIDTHxHEIGHT (1600x1200 for HD Ground-like data)")->capture_default_str();
+  cmd->add_option("--fx", o->fx, "Focal length x, pixels (default: HD Ground's, scaled)");
+  cmd->add_option("--fy", o->fy, "Focal length y, pixels");
+  cmd->add_option("--cx", o->cx, "Principal point x, pixels");
+  cmd->add_option("--cy", o->cy, "Principal point y, pixels");
+  cmd->add_option("--distortion", o->distortion, "OpenCV distortion k1 k2 p1 p2 k3")->expected(5)->delimiter(',');
+  cmd->add_option("--height-m", o->settings.mounting_height_m, "Camera mounting height")->check(CLI::PositiveNumber)->capture_default_str();
+  cmd->add_option("--jitter-deg", o->settings.mount_jitter_deg, "Roll/pitch jitter of the mount, degrees (std)")
+      ->check(CLI::Range(0.0, 20.0))->capture_default_str();
+  cmd->add_option("--noise", o->settings.photometry.noise_sigma, "Sensor noise, grey levels (std)")->check(CLI::Range(0.0, 100.0))->capture_default_str();
+  cmd->add_option("--defocus-px", o->settings.photometry.defocus_sigma_px, "Defocus blur sigma, pixels")->check(CLI::Range(0.0, 20.0))->capture_default_str();
+  cmd->add_option("--motion-blur", o->settings.motion_blur, "Exposure time as a fraction of the frame interval")
+      ->check(CLI::Range(0.0, 1.0))->capture_default_str();
+  cmd->add_option("--exposure-variation", o->settings.photometry.exposure_variation, "Relative exposure change amplitude")
+      ->check(CLI::Range(0.0, 0.9))->capture_default_str();
+  cmd->add_option("--vignetting", o->settings.photometry.vignetting, "Darkening at the corners (0-1)")->check(CLI::Range(0.0, 1.0))->capture_default_str();
+  cmd->add_option("--wet-after", o->settings.wet_after, "Fraction of the path after which the ground is wet (1: never)")
+      ->check(CLI::Range(0.0, 1.0))->capture_default_str();
+  cmd->add_option("--seed", o->settings.seed, "Seed of every random choice")->capture_default_str();
+  cmd->callback([o]() { simulate(*o); });
+}
+
+}  // namespace groundslam::apps

@@ -1,0 +1,228 @@
+#include "groundslam/io/ConfigYaml.hpp"
+
+#include <algorithm>
+#include <fstream>
+#include <map>
+#include <sstream>
+
+#include <yaml-cpp/yaml.h>
+
+#include "groundslam/io/InputError.hpp"
+
+namespace groundslam {
+namespace {
+
+std::string where(const std::string& source, const YAML::Node& node) {
+  return source + ":" + std::to_string(node.Mark().line + 1);
+}
+
+[[noreturn]] void fail(const std::string& source, const YAML::Node& node, const std::string& key,
+                       const std::string& what) {
+  throw InputError(where(source, node) + ": key '" + key + "': " + what);
+}
+
+/// Reads the fields present in one parsed YAML document into a Config.
+class FieldReader {
+ public:
+  FieldReader(const YAML::Node& root, const std::string& source, std::set<std::string>& set_keys)
+      : root_(root), source_(source), set_keys_(set_keys) {}
+
+  template <class T, class Constraint>
+  void operator()(const char* section, const char* key, T& field, const Constraint& constraint) {
+    known_[section].insert(key);
+    const YAML::Node sec = root_[section];
+    if (!sec || !sec.IsMap()) return;
+    const YAML::Node node = sec[key];
+    if (!node) return;
+    const std::string name = std::string(section) + "." + key;
+    read(node, name, field, constraint);
+    set_keys_.insert(name);
+  }
+
+  void rejectUnknownKeys() const {
+    if (!root_.IsMap()) throw InputError(source_ + ": expected a YAML mapping of sections");
+    for (const auto& section : root_) {
+      const std::string name = section.first.as<std::string>();
+      const auto known = known_.find(name);
+      if (known == known_.end()) fail(source_, section.first, name, "unknown section");
+      if (section.second.IsNull()) continue;
+      if (!section.second.IsMap()) fail(source_, section.second, name, "expected a mapping");
+      for (const auto& entry : section.second) {
+        const std::string key = entry.first.as<std::string>();
+        if (!known->second.count(key)) fail(source_, entry.first, name + "." + key, "unknown key");
+      }
+    }
+  }
+
+ private:
+  double number(const YAML::Node& node, const std::string& name) const {
+    if (!node.IsScalar()) fail(source_, node, name, "expected a number");
+    try {
+      return node.as<double>();
+    } catch (const YAML::Exception&) {
+      fail(source_, node, name, "expected a number, got '" + node.Scalar() + "'");
+    }
+  }
+
+  void checkRange(const YAML::Node& node, const std::string& name, double value, const Range& range) const {
+    const bool below = range.min_exclusive ? value <= range.min : value < range.min;
+    if (below || value > range.max || value != value) {
+      std::ostringstream msg;
+      msg << "value " << value << " out of range " << (range.min_exclusive ? "(" : "[") << range.min << ", "
+          << range.max << "]";
+      fail(source_, node, name, msg.str());
+    }
+  }
+
+  void read(const YAML::Node& node, const std::string& name, double& field, const Range& range) const {
+    field = number(node, name);
+    checkRange(node, name, field, range);
+  }
+
+  void read(const YAML::Node& node, const std::string& name, int& field, const Range& range) const {
+    const double value = number(node, name);
+    if (value != static_cast<double>(static_cast<long long>(value))) {
+      fail(source_, node, name, "expected an integer, got '" + node.Scalar() + "'");
+    }
+    checkRange(node, name, value, range);
+    field = static_cast<int>(value);
+  }
+
+  void read(const YAML::Node& node, const std::string& name, std::string& field, const Choices& choices) const {
+    if (!node.IsScalar()) fail(source_, node, name, "expected a string");
+    const std::string value = node.Scalar();
+    if (std::find(choices.begin(), choices.end(), value) == choices.end()) {
+      std::string allowed;
+      for (const auto& choice : choices) allowed += (allowed.empty() ? "" : ", ") + choice;
+      fail(source_, node, name, "'" + value + "' is not one of: " + allowed);
+    }
+    field = value;
+  }
+
+  template <size_t N>
+  void read(const YAML::Node& node, const std::string& name, std::array<double, N>& field, const Range& range) const {
+    if (!node.IsSequence() || node.size() != N) {
+      fail(source_, node, name, "expected a list of " + std::to_string(N) + " numbers");
+    }
+    for (size_t i = 0; i < N; ++i) read(node[i], name, field[i], range);
+  }
+
+  template <class T>
+  void read(const YAML::Node& node, const std::string& name, std::optional<T>& field, const Range& range) const {
+    if (node.IsNull()) {
+      field.reset();
+      return;
+    }
+    T value{};
+    read(node, name, value, range);
+    field = value;
+  }
+
+  const YAML::Node& root_;
+  const std::string& source_;
+  std::set<std::string>& set_keys_;
+  std::map<std::string, std::set<std::string>> known_;
+};
+
+/// Writes every field into a YAML emitter, grouped by section.
+class FieldWriter {
+ public:
+  FieldWriter(YAML::Emitter& out, const std::vector<std::string>& only_sections)
+      : out_(out), only_sections_(only_sections) {}
+
+  template <class T, class Constraint>
+  void operator()(const char* section, const char* key, const T& field, const Constraint&) {
+    if (!only_sections_.empty() &&
+        std::find(only_sections_.begin(), only_sections_.end(), section) == only_sections_.end()) {
+      return;
+    }
+    if (section_ != section) {
+      if (!section_.empty()) out_ << YAML::EndMap;
+      section_ = section;
+      out_ << YAML::Key << section << YAML::Value << YAML::BeginMap;
+    }
+    out_ << YAML::Key << key << YAML::Value;
+    write(field);
+  }
+
+  void close() {
+    if (!section_.empty()) out_ << YAML::EndMap;
+  }
+
+ private:
+  void write(double value) { out_ << value; }
+  void write(int value) { out_ << value; }
+  void write(const std::string& value) { out_ << value; }
+  template <size_t N>
+  void write(const std::array<double, N>& values) {
+    out_ << YAML::Flow << YAML::BeginSeq;
+    for (double v : values) out_ << v;
+    out_ << YAML::EndSeq;
+  }
+  template <class T>
+  void write(const std::optional<T>& value) {
+    if (value) {
+      write(*value);
+    } else {
+      out_ << YAML::Null;
+    }
+  }
+
+  YAML::Emitter& out_;
+  const std::vector<std::string>& only_sections_;
+  std::string section_;
+};
+
+}  // namespace
+
+void ConfigLoader::applyText(const std::string& yaml_text, const std::string& source) {
+  YAML::Node root;
+  try {
+    root = YAML::Load(yaml_text);
+  } catch (const YAML::ParserException& e) {
+    throw InputError(source + ":" + std::to_string(e.mark.line + 1) + ": invalid YAML: " + e.msg);
+  }
+  sources_.push_back(source);
+  if (root.IsNull()) return;
+  FieldReader reader(root, source, set_keys_);
+  visitConfigFields(config_, reader);
+  reader.rejectUnknownKeys();
+}
+
+void ConfigLoader::applyFile(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw InputError(path + ": cannot open configuration file");
+  std::stringstream text;
+  text << in.rdbuf();
+  applyText(text.str(), path);
+}
+
+Config ConfigLoader::finish() const {
+  for (const auto& key : requiredConfigKeys()) {
+    if (set_keys_.count(key)) continue;
+    std::string sources;
+    for (const auto& s : sources_) sources += (sources.empty() ? "" : ", ") + s;
+    throw InputError("missing required key '" + key + "'" +
+                     (sources.empty() ? std::string(" (no configuration file given)") : " in " + sources));
+  }
+  return config_;
+}
+
+Config loadConfig(const std::vector<std::string>& paths) {
+  ConfigLoader loader;
+  for (const auto& path : paths) loader.applyFile(path);
+  return loader.finish();
+}
+
+std::string configToYaml(const Config& config, const std::vector<std::string>& only_sections) {
+  YAML::Emitter out;
+  out.SetDoublePrecision(17);
+  out << YAML::BeginMap;
+  FieldWriter writer(out, only_sections);
+  visitConfigFields(config, writer);
+  writer.close();
+  out << YAML::EndMap;
+  return std::string(out.c_str()) + "\n";
+}
+
+}  // namespace groundslam

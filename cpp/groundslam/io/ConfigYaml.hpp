@@ -1,0 +1,34 @@
+#pragma once
+// Reading and writing the run configuration as YAML (conventions.md). Files are applied in layers
+// over the defaults; unknown keys and bad values are errors that name the file, line and key.
+
+#include <set>
+#include <string>
+#include <vector>
+
+#include "groundslam/pipeline/Config.hpp"
+
+namespace groundslam {
+
+class ConfigLoader {
+ public:
+  /// Applies the keys of one YAML file over what is set so far. Throws InputError.
+  void applyFile(const std::string& path);
+  /// Applies YAML text; `source` names it in errors.
+  void applyText(const std::string& yaml_text, const std::string& source);
+  /// The configuration; throws InputError naming a required key that no layer set.
+  Config finish() const;
+
+ private:
+  Config config_;
+  std::set<std::string> set_keys_;
+  std::vector<std::string> sources_;
+};
+
+/// Loads files in order (later ones override earlier ones) and checks the required keys.
+Config loadConfig(const std::vector<std::string>& paths);
+
+/// The effective configuration as YAML text: every key, or only those of the named sections.
+std::string configToYaml(const Config& config, const std::vector<std::string>& only_sections = {});
+
+}  // namespace groundslam

@@ -1,0 +1,49 @@
+#pragma once
+// Input sequences: an HD Ground list (`NAME.txt` with poses, `NAME.test` without) or a plain folder of
+// images in natural sort order. Formats are fixed by conventions.md.
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+#include <opencv2/core.hpp>
+
+#include "groundslam/core/CameraModel.hpp"
+#include "groundslam/core/Pose2.hpp"
+
+namespace groundslam {
+
+struct DatasetFrame {
+  std::string image_path;                         ///< usable path (list-relative paths resolved)
+  double timestamp = 0.0;                         ///< the frame index: HD Ground has no times
+  std::optional<Eigen::Matrix3d> map_from_image;  ///< HD Ground's A: image pixel -> map pixel
+  bool pose_reliable = true;                      ///< false for a `* ` pose line
+};
+
+struct Dataset {
+  std::string source;                      ///< the list file or folder that was opened
+  std::vector<DatasetFrame> frames;
+  std::optional<std::string> camera_yaml;  ///< `camera.yaml` beside the list or in the folder
+  bool hasGroundTruth() const;
+};
+
+/// Opens a list file or an image folder. Throws InputError naming the path (and line).
+Dataset openDataset(const std::string& path);
+
+/// Robot pose from HD Ground's A (conventions.md): m = A (cx, cy, 1); x = s m_x, y = -s m_y,
+/// theta = atan2(-A10, A00), with s metres per map pixel.
+Pose2 robotPoseFromMapHomography(const Eigen::Matrix3d& A, double cx, double cy, double meters_per_pixel);
+
+/// The inverse for the default straight-down mount: the A that a robot at T_world_robot sees.
+Eigen::Matrix3d mapHomographyFromRobotPose(const Pose2& T_world_robot, const CameraIntrinsics& intrinsics,
+                                           double meters_per_pixel);
+
+/// Writes an HD Ground list: image paths (relative to the list's folder) and their A matrices.
+std::string formatHdGroundList(const std::vector<std::string>& relative_image_paths,
+                               const std::vector<Eigen::Matrix3d>& map_from_image);
+
+/// Loads an image as 8-bit grey; throws InputError when it does not decode or has the wrong size.
+cv::Mat loadGrayImage(const std::string& path, int expected_width, int expected_height);
+
+}  // namespace groundslam

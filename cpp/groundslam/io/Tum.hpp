@@ -1,0 +1,21 @@
+#pragma once
+// TUM trajectory files: `t x y z qx qy qz qw`, z = qx = qy = 0, qz = sin(theta/2), qw = cos(theta/2).
+
+#include <string>
+#include <vector>
+
+#include "groundslam/core/Pose2.hpp"
+
+namespace groundslam {
+
+struct StampedPose {
+  double timestamp = 0.0;   ///< seconds, or the frame index when the data has no time
+  Pose2 T_world_robot;
+};
+
+std::string formatTum(const std::vector<StampedPose>& poses);
+void writeTum(const std::string& path, const std::vector<StampedPose>& poses);
+/// Reads a TUM file; a 3-D pose is projected to the plane (yaw from the quaternion). Throws InputError.
+std::vector<StampedPose> readTum(const std::string& path);
+
+}  // namespace groundslam

@@ -1,0 +1,109 @@
+#pragma once
+// The whole run configuration: one plain struct per component, defaults in code. Every field is
+// listed once in visitConfigFields(), which the YAML reader and writer both walk, so a key cannot be
+// readable but not written, or written but not validated.
+
+#include <array>
+#include <limits>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace groundslam {
+
+struct CameraConfig {
+  int image_width = 0;                      ///< pixels (required)
+  int image_height = 0;                     ///< pixels (required)
+  double fx = 0.0, fy = 0.0;                ///< focal lengths, pixels (required)
+  double cx = 0.0, cy = 0.0;                ///< principal point, pixels (required)
+  std::array<double, 5> distortion{};       ///< OpenCV k1 k2 p1 p2 k3 (required)
+  double mounting_height_m = 0.25;          ///< used when T_robot_camera is absent (required)
+  std::optional<std::array<double, 16>> T_robot_camera;  ///< row-major 4x4, overrides the default mount
+};
+
+struct DatasetConfig {
+  std::optional<double> map_meters_per_pixel;  ///< HD Ground map scale; empty: mounting_height_m / fx
+};
+
+struct FeatureConfig {
+  int num_features = 1000;        ///< ORB keypoints kept per image
+  double scale_factor = 1.2;      ///< pyramid decimation ratio
+  int num_levels = 4;             ///< pyramid levels
+  int fast_threshold = 10;        ///< FAST corner threshold, grey levels
+  int patch_size = 31;            ///< BRIEF patch, pixels
+  int edge_threshold = 31;        ///< border without features, pixels
+  std::string score_type = "harris";  ///< harris | fast
+  int near_twin_max_distance = 0; ///< drop descriptors within this Hamming distance of another in the same image; 0 = keep all
+};
+
+struct MatchingConfig {
+  double ratio = 0.7;                   ///< Lowe ratio test threshold lambda
+  std::string method = "brute_force";   ///< brute_force | lsh
+};
+
+struct OdometryConfig {
+  std::string loss = "huber";           ///< huber | cauchy | geman_mcclure
+  double loss_scale_m = 0.0005;         ///< residual scale of the robust loss, metres
+  int min_inliers = 12;                 ///< fewer inliers than this is a failed fit
+  double ransac_inlier_m = 0.002;       ///< 2-point RANSAC inlier distance, metres
+  int ransac_iterations = 200;          ///< 2-point RANSAC hypotheses
+  int seed = 42;                        ///< seed of the RANSAC sampler
+  double fallback_covariance_scale = 1e4;  ///< covariance inflation of a fallback (failed) odometry edge
+};
+
+struct Config {
+  CameraConfig camera;
+  DatasetConfig dataset;
+  FeatureConfig features;
+  MatchingConfig matching;
+  OdometryConfig odometry;
+};
+
+/// Allowed values of a numeric field.
+struct Range {
+  double min = -std::numeric_limits<double>::infinity();
+  double max = std::numeric_limits<double>::infinity();
+  bool min_exclusive = false;
+};
+constexpr Range kPositive{0.0, std::numeric_limits<double>::infinity(), true};
+constexpr Range kNonNegative{0.0, std::numeric_limits<double>::infinity(), false};
+
+/// Allowed values of a string field.
+using Choices = std::vector<std::string>;
+
+/// Keys that a configuration must set (conventions.md): "section.key".
+const std::vector<std::string>& requiredConfigKeys();
+
+/// Calls visitor(section, key, field, constraint, doc) for every field of the configuration.
+template <class Config_, class Visitor>
+void visitConfigFields(Config_& c, Visitor&& v) {
+  v("camera", "image_width", c.camera.image_width, kPositive);
+  v("camera", "image_height", c.camera.image_height, kPositive);
+  v("camera", "fx", c.camera.fx, kPositive);
+  v("camera", "fy", c.camera.fy, kPositive);
+  v("camera", "cx", c.camera.cx, Range{});
+  v("camera", "cy", c.camera.cy, Range{});
+  v("camera", "distortion", c.camera.distortion, Range{});
+  v("camera", "mounting_height_m", c.camera.mounting_height_m, kPositive);
+  v("camera", "T_robot_camera", c.camera.T_robot_camera, Range{});
+  v("dataset", "map_meters_per_pixel", c.dataset.map_meters_per_pixel, kPositive);
+  v("features", "num_features", c.features.num_features, Range{10, 100000});
+  v("features", "scale_factor", c.features.scale_factor, Range{1.0, 4.0, true});
+  v("features", "num_levels", c.features.num_levels, Range{1, 16});
+  v("features", "fast_threshold", c.features.fast_threshold, Range{1, 255});
+  v("features", "patch_size", c.features.patch_size, Range{3, 255});
+  v("features", "edge_threshold", c.features.edge_threshold, Range{0, 255});
+  v("features", "score_type", c.features.score_type, Choices{"harris", "fast"});
+  v("features", "near_twin_max_distance", c.features.near_twin_max_distance, Range{0, 256});
+  v("matching", "ratio", c.matching.ratio, Range{0.0, 1.0, true});
+  v("matching", "method", c.matching.method, Choices{"brute_force", "lsh"});
+  v("odometry", "loss", c.odometry.loss, Choices{"huber", "cauchy", "geman_mcclure"});
+  v("odometry", "loss_scale_m", c.odometry.loss_scale_m, kPositive);
+  v("odometry", "min_inliers", c.odometry.min_inliers, Range{3, 100000});
+  v("odometry", "ransac_inlier_m", c.odometry.ransac_inlier_m, kPositive);
+  v("odometry", "ransac_iterations", c.odometry.ransac_iterations, Range{1, 1000000});
+  v("odometry", "seed", c.odometry.seed, kNonNegative);
+  v("odometry", "fallback_covariance_scale", c.odometry.fallback_covariance_scale, Range{1.0, 1e12});
+}
+
+}  // namespace groundslam

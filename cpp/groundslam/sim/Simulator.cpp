@@ -1,0 +1,125 @@
+#include "groundslam/sim/Simulator.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include <opencv2/imgproc.hpp>
+
+namespace groundslam::sim {
+namespace {
+
+constexpr int kMaxTextureSide = 8192;  // texels; bounds the memory of a texture to 256 MB
+
+int supersamplingFor(const CameraIntrinsics& camera) { return camera.width <= 800 ? 2 : 1; }
+
+}  // namespace
+
+CameraIntrinsics scaledHdGroundIntrinsics(int width, int height) {
+  // HD Ground: 1600x1200, fx = 2195.70853, fy = 2195.56073, cx = 820.7289683, cy = 606.242723.
+  const double scale = width / 1600.0;
+  CameraIntrinsics k;
+  k.width = width;
+  k.height = height;
+  k.fx = 2195.70853 * scale;
+  k.fy = 2195.56073 * scale;
+  k.cx = 0.5 * width + (820.7289683 - 800.0) * scale;
+  k.cy = 0.5 * height + (606.242723 - 600.0) * scale;
+  return k;
+}
+
+SequenceSimulator::SequenceSimulator(const SimulationSettings& settings, const cv::Mat& user_texture)
+    : settings_(settings),
+      camera_(settings.camera, defaultCameraMount(settings.mounting_height_m)),
+      poses_(generatePath(settings.path)),
+      renderer_(camera_, supersamplingFor(settings.camera)) {
+  cv::RNG rng(settings.seed * 31ULL + 2ULL);
+  const double sigma = settings.mount_jitter_deg * M_PI / 180.0, keep = 0.8;
+  Eigen::Vector2d jitter(rng.gaussian(sigma), rng.gaussian(sigma));
+  for (size_t i = 0; i < poses_.size(); ++i) {
+    jitter_rad_.push_back(jitter);
+    // AR(1) with stationary standard deviation sigma: the mount rocks smoothly.
+    const double innovation = sigma * std::sqrt(1.0 - keep * keep);
+    jitter = keep * jitter + Eigen::Vector2d(rng.gaussian(innovation), rng.gaussian(innovation));
+  }
+  dry_ = layTexture(user_texture);
+  wet_ = dry_;
+  if (settings.wet_after < 1.0) wet_.albedo = wetAlbedo(dry_.albedo, dry_.texel_m, settings.seed);
+}
+
+double SequenceSimulator::footprintRadius() const {
+  const auto& k = settings_.camera;
+  double radius = 0.0;
+  for (const Eigen::Vector2d& corner : {Eigen::Vector2d(0, 0), Eigen::Vector2d(k.width, 0), Eigen::Vector2d(0, k.height),
+                                       Eigen::Vector2d(k.width, k.height)}) {
+    if (const auto p = camera_.pixelToGround(corner)) radius = std::max(radius, p->norm());
+  }
+  const double jitter_m = settings_.mounting_height_m * std::tan(4.0 * settings_.mount_jitter_deg * M_PI / 180.0);
+  return 1.1 * radius + jitter_m + 0.01;
+}
+
+GroundTexture SequenceSimulator::layTexture(const cv::Mat& user_texture) const {
+  double x_min = 1e9, x_max = -1e9, y_min = 1e9, y_max = -1e9;
+  for (const Pose2& p : poses_) {
+    x_min = std::min(x_min, p.x);
+    x_max = std::max(x_max, p.x);
+    y_min = std::min(y_min, p.y);
+    y_max = std::max(y_max, p.y);
+  }
+  const double margin = footprintRadius();
+  x_min -= margin, x_max += margin, y_min -= margin, y_max += margin;
+  GroundTexture texture;
+  if (!user_texture.empty()) {
+    user_texture.convertTo(texture.albedo, CV_32F, 1.0 / 255.0);
+    texture.texel_m = settings_.user_texture_width_m / user_texture.cols;
+    // Centre the image on the path; beyond its edges the renderer mirrors it.
+    texture.x_min_m = 0.5 * (x_min + x_max) - 0.5 * settings_.user_texture_width_m;
+    texture.y_max_m = 0.5 * (y_min + y_max) + 0.5 * texture.texel_m * user_texture.rows;
+    return texture;
+  }
+  const double extent = std::max(x_max - x_min, y_max - y_min);
+  texture.texel_m = std::max(camera_.groundSampleDistance() / supersamplingFor(settings_.camera),
+                             extent / kMaxTextureSide);
+  texture.x_min_m = x_min;
+  texture.y_max_m = y_max;
+  const cv::Size size(static_cast<int>(std::ceil((x_max - x_min) / texture.texel_m)),
+                      static_cast<int>(std::ceil((y_max - y_min) / texture.texel_m)));
+  TextureKind kind = TextureKind::asphalt;
+  parseTextureKind(settings_.texture_kind, kind);
+  texture.albedo = generateAlbedo(kind, size, texture.texel_m, settings_.seed);
+  return texture;
+}
+
+Eigen::Isometry3d SequenceSimulator::mountAt(int index) const {
+  const Eigen::Vector2d& j = jitter_rad_[static_cast<size_t>(index)];
+  Eigen::Isometry3d T = defaultCameraMount(settings_.mounting_height_m);
+  T.linear() = (Eigen::AngleAxisd(j.x(), Eigen::Vector3d::UnitX()) * Eigen::AngleAxisd(j.y(), Eigen::Vector3d::UnitY()))
+                   .toRotationMatrix() *
+               T.linear();
+  return T;
+}
+
+cv::Mat SequenceSimulator::renderFrame(int index) const {
+  const bool wet = index >= static_cast<int>(settings_.wet_after * frameCount());
+  const GroundTexture& texture = wet ? wet_ : dry_;
+  const Pose2& pose = poses_[static_cast<size_t>(index)];
+  const Eigen::Isometry3d mount = mountAt(index);
+  cv::Mat radiance;
+  if (settings_.motion_blur > 0.0 && index > 0) {
+    // Average renders over the exposure, which ends at this frame's pose (the shutter closes at the timestamp).
+    const Pose2 motion = between(poses_[static_cast<size_t>(index) - 1], pose);
+    const double blur_px = settings_.motion_blur * motion.translation().norm() / camera_.groundSampleDistance();
+    const int samples = std::clamp(static_cast<int>(std::ceil(blur_px)) + 1, 2, 12);
+    radiance = cv::Mat::zeros(settings_.camera.height, settings_.camera.width, CV_32F);
+    for (int k = 0; k < samples; ++k) {
+      const double back = settings_.motion_blur * k / (samples - 1);
+      const Pose2 sub = pose * Pose2(-back * motion.x, -back * motion.y, -back * motion.theta);
+      radiance += renderer_.render(texture, sub, mount);
+    }
+    radiance /= samples;
+  } else {
+    radiance = renderer_.render(texture, pose, mount);
+  }
+  return expose(radiance, settings_.photometry, index, settings_.seed);
+}
+
+}  // namespace groundslam::sim

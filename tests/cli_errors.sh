@@ -1,0 +1,37 @@
+#!/usr/bin/env bash
+# Bad input reaches the user as a clear message naming the culprit and a non-zero exit, never a crash.
+set -u
+bin=$1
+tmp=$2
+rm -rf "$tmp" && mkdir -p "$tmp"
+failures=0
+passes=0
+
+expect_error() {  # expect_error NAME PATTERN COMMAND...
+  local name=$1 pattern=$2
+  shift 2
+  local output status
+  output=$("$@" 2>&1)
+  status=$?
+  if [ $status -ne 0 ] && [ $status -lt 128 ] && grep -qF -- "$pattern" <<<"$output"; then
+    passes=$((passes + 1))
+  else
+    echo "FAIL $name: exit $status, output: $output"
+    failures=$((failures + 1))
+  fi
+}
+
+expect_error "run on a missing path" "$tmp/no/such/dataset.txt" "$bin" run "$tmp/no/such/dataset.txt" --out "$tmp/run"
+"$bin" simulate "$tmp/seq" --frames 3 --resolution 64x48 >/dev/null
+printf 'features:\n  num_featurez: 5\n' >"$tmp/bad_key.yaml"
+expect_error "unknown config key" "features.num_featurez" "$bin" run "$tmp/seq/sequence.txt" --config "$tmp/bad_key.yaml" --out "$tmp/run"
+printf 'matching:\n  ratio: 1.5\n' >"$tmp/bad_value.yaml"
+expect_error "config value out of range" "matching.ratio" "$bin" run "$tmp/seq/sequence.txt" --config "$tmp/bad_value.yaml" --out "$tmp/run"
+cp -r "$tmp/seq" "$tmp/seq_bad"
+sed -i '2s/.*/1 2 3/' "$tmp/seq_bad/sequence.txt"
+expect_error "malformed pose line" "sequence.txt:2: expected 9 numbers" "$bin" run "$tmp/seq_bad/sequence.txt" --out "$tmp/run"
+expect_error "unknown subcommand option" "--frobnicate" "$bin" simulate "$tmp/x" --frobnicate
+expect_error "bad resolution" "--resolution" "$bin" simulate "$tmp/x" --resolution 12by4
+[ -d "$tmp/run" ] && [ -f "$tmp/run/trajectory.tum" ] && { echo "FAIL: a failed run left a trajectory"; failures=$((failures + 1)); }
+echo "$passes passed, $failures failed"
+[ $failures -eq 0 ]

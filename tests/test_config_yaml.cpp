@@ -1,0 +1,108 @@
+#include <gtest/gtest.h>
+
+#include "TestFiles.hpp"
+#include "groundslam/io/ConfigYaml.hpp"
+#include "groundslam/io/InputError.hpp"
+
+using namespace groundslam;
+using groundslam::testing::inputErrorOf;
+
+namespace {
+
+const char* kCameraYaml = R"(camera:
+  image_width: 1600
+  image_height: 1200
+  fx: 2195.70853
+  fy: 2195.56073
+  cx: 820.7289683
+  cy: 606.242723
+  distortion: [0, 0, 0, 0, 0]
+  mounting_height_m: 0.25
+dataset:
+  map_meters_per_pixel: null
+)";
+
+Config load(const std::string& text) {
+  ConfigLoader loader;
+  loader.applyText(text, "test.yaml");
+  return loader.finish();
+}
+
+}  // namespace
+
+TEST(ConfigYaml, ReadsTheConventionsCameraFile) {
+  const Config c = load(kCameraYaml);
+  EXPECT_EQ(c.camera.image_width, 1600);
+  EXPECT_DOUBLE_EQ(c.camera.fx, 2195.70853);
+  EXPECT_DOUBLE_EQ(c.camera.cy, 606.242723);
+  EXPECT_FALSE(c.dataset.map_meters_per_pixel.has_value());
+  EXPECT_FALSE(c.camera.T_robot_camera.has_value());
+  EXPECT_EQ(c.features.num_features, FeatureConfig{}.num_features);  // defaults kept
+}
+
+TEST(ConfigYaml, WrittenConfigReadsBackIdentically) {
+  Config c = load(kCameraYaml);
+  c.camera.distortion = {0.1, -0.2, 0.001, 0.002, 0.05};
+  c.camera.T_robot_camera = std::array<double, 16>{1, 0, 0, 0.1, 0, -1, 0, 0, 0, 0, -1, 0.3, 0, 0, 0, 1};
+  c.dataset.map_meters_per_pixel = 1.25e-4;
+  c.matching.ratio = 0.55;
+  c.odometry.loss = "cauchy";
+  const std::string text = configToYaml(c);
+  const Config back = load(text);
+  EXPECT_EQ(configToYaml(back), text);
+  EXPECT_EQ(back.camera.distortion, c.camera.distortion);
+  EXPECT_EQ(*back.camera.T_robot_camera, *c.camera.T_robot_camera);
+  EXPECT_DOUBLE_EQ(*back.dataset.map_meters_per_pixel, 1.25e-4);
+  EXPECT_EQ(back.odometry.loss, "cauchy");
+}
+
+TEST(ConfigYaml, LaterLayersOverrideEarlierOnes) {
+  ConfigLoader loader;
+  loader.applyText(kCameraYaml, "camera.yaml");
+  loader.applyText("matching:\n  ratio: 0.6\ncamera:\n  fx: 1000\n", "override.yaml");
+  const Config c = loader.finish();
+  EXPECT_DOUBLE_EQ(c.matching.ratio, 0.6);
+  EXPECT_DOUBLE_EQ(c.camera.fx, 1000.0);
+  EXPECT_DOUBLE_EQ(c.camera.fy, 2195.56073);
+}
+
+TEST(ConfigYaml, UnknownKeyIsNamedWithItsLine) {
+  const std::string message = inputErrorOf([] { load(std::string(kCameraYaml) + "matching:\n  ratio_threshold: 0.5\n"); });
+  EXPECT_NE(message.find("test.yaml:13"), std::string::npos) << message;
+  EXPECT_NE(message.find("matching.ratio_threshold"), std::string::npos) << message;
+  EXPECT_NE(message.find("unknown key"), std::string::npos) << message;
+  EXPECT_NE(inputErrorOf([] { load(std::string(kCameraYaml) + "magic:\n  x: 1\n"); }).find("unknown section"),
+            std::string::npos);
+}
+
+TEST(ConfigYaml, BadValuesAreNamed) {
+  auto replace = [](std::string text, const std::string& from, const std::string& to) {
+    return text.replace(text.find(from), from.size(), to);
+  };
+  std::string m = inputErrorOf([&] { load(replace(kCameraYaml, "fx: 2195.70853", "fx: fast")); });
+  EXPECT_NE(m.find("camera.fx"), std::string::npos) << m;
+  EXPECT_NE(m.find("test.yaml:4"), std::string::npos) << m;
+  m = inputErrorOf([&] { load(replace(kCameraYaml, "fx: 2195.70853", "fx: -3")); });
+  EXPECT_NE(m.find("out of range"), std::string::npos) << m;
+  m = inputErrorOf([&] { load(replace(kCameraYaml, "image_width: 1600", "image_width: 16.5")); });
+  EXPECT_NE(m.find("camera.image_width"), std::string::npos) << m;
+  m = inputErrorOf([&] { load(replace(kCameraYaml, "[0, 0, 0, 0, 0]", "[0, 0, 0]")); });
+  EXPECT_NE(m.find("camera.distortion"), std::string::npos) << m;
+  m = inputErrorOf([&] { load(std::string(kCameraYaml) + "odometry:\n  loss: l2\n"); });
+  EXPECT_NE(m.find("odometry.loss"), std::string::npos) << m;
+  EXPECT_NE(m.find("huber"), std::string::npos) << m;
+}
+
+TEST(ConfigYaml, MissingRequiredKeyIsNamed) {
+  const std::string text = std::string(kCameraYaml).replace(std::string(kCameraYaml).find("  cy: 606.242723\n"), 17, "");
+  const std::string m = inputErrorOf([&] { load(text); });
+  EXPECT_NE(m.find("camera.cy"), std::string::npos) << m;
+  EXPECT_NE(inputErrorOf([] { load(""); }).find("camera.image_width"), std::string::npos);
+}
+
+TEST(ConfigYaml, MissingFileAndBrokenYamlAreNamed) {
+  EXPECT_NE(inputErrorOf([] { loadConfig({"/nonexistent/cfg.yaml"}); }).find("/nonexistent/cfg.yaml"), std::string::npos);
+  const std::string m = inputErrorOf([] { load("camera: [1, 2\n"); });
+  EXPECT_NE(m.find("test.yaml"), std::string::npos) << m;
+  EXPECT_NE(m.find("invalid YAML"), std::string::npos) << m;
+}
