@@ -37,7 +37,7 @@ TEST(ConfigYaml, ReadsTheConventionsCameraFile) {
   EXPECT_DOUBLE_EQ(c.camera.cy, 606.242723);
   EXPECT_FALSE(c.dataset.map_meters_per_pixel.has_value());
   EXPECT_FALSE(c.camera.T_robot_camera.has_value());
-  EXPECT_EQ(c.features.num_features, FeatureConfig{}.num_features);  // defaults kept
+  EXPECT_EQ(c.features.num_features, OrbSettings{}.num_features);  // defaults kept
 }
 
 TEST(ConfigYaml, WrittenConfigReadsBackIdentically) {
@@ -105,4 +105,12 @@ TEST(ConfigYaml, MissingFileAndBrokenYamlAreNamed) {
   const std::string m = inputErrorOf([] { load("camera: [1, 2\n"); });
   EXPECT_NE(m.find("test.yaml"), std::string::npos) << m;
   EXPECT_NE(m.find("invalid YAML"), std::string::npos) << m;
+}
+
+TEST(ConfigYaml, ShippedDefaultFileMatchesTheDefaultsInCode) {
+  const Config shipped = loadConfig({std::string(GROUNDSLAM_SOURCE_DIR) + "/config/default.yaml"});
+  Config expected;
+  expected.camera = shipped.camera;  // the file shows HD Ground's camera; the rest must be the defaults
+  EXPECT_EQ(configToYaml(shipped), configToYaml(expected));
+  EXPECT_DOUBLE_EQ(shipped.camera.fx, 2195.70853);
 }

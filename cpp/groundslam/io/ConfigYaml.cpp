@@ -1,6 +1,7 @@
 #include "groundslam/io/ConfigYaml.hpp"
 
 #include <algorithm>
+#include <charconv>
 #include <fstream>
 #include <map>
 #include <sstream>
@@ -150,7 +151,12 @@ class FieldWriter {
   }
 
  private:
-  void write(double value) { out_ << value; }
+  void write(double value) {
+    // The shortest text that reads back to the same double: 0.7, not 0.69999999999999996.
+    char text[64];
+    const auto end = std::to_chars(text, text + sizeof(text), value).ptr;
+    out_ << std::string(text, end);
+  }
   void write(int value) { out_ << value; }
   void write(const std::string& value) { out_ << value; }
   template <size_t N>
@@ -216,7 +222,7 @@ Config loadConfig(const std::vector<std::string>& paths) {
 
 std::string configToYaml(const Config& config, const std::vector<std::string>& only_sections) {
   YAML::Emitter out;
-  out.SetDoublePrecision(17);
+  out.SetNullFormat(YAML::LowerNull);  // `null`, as conventions.md writes it
   out << YAML::BeginMap;
   FieldWriter writer(out, only_sections);
   visitConfigFields(config, writer);

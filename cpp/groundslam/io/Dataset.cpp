@@ -123,6 +123,18 @@ Eigen::Matrix3d mapHomographyFromRobotPose(const Pose2& T_world_robot, const Cam
   return world_to_map * T_world_robot.matrix() * pixel_to_robot;
 }
 
+Trajectory groundTruthOf(const Dataset& dataset, const Config& config) {
+  const double meters_per_pixel =
+      config.dataset.map_meters_per_pixel.value_or(config.camera.mounting_height_m / config.camera.fx);
+  Trajectory poses;
+  for (const auto& frame : dataset.frames) {
+    if (!frame.map_from_image || !frame.pose_reliable) continue;
+    poses.push_back({frame.timestamp, robotPoseFromMapHomography(*frame.map_from_image, config.camera.cx,
+                                                                 config.camera.cy, meters_per_pixel)});
+  }
+  return poses;
+}
+
 std::string formatHdGroundList(const std::vector<std::string>& relative_image_paths,
                                const std::vector<Eigen::Matrix3d>& map_from_image) {
   std::string text;

@@ -11,6 +11,8 @@
 
 #include "groundslam/core/CameraModel.hpp"
 #include "groundslam/core/Pose2.hpp"
+#include "groundslam/core/Trajectory.hpp"
+#include "groundslam/pipeline/Config.hpp"
 
 namespace groundslam {
 
@@ -38,6 +40,10 @@ Pose2 robotPoseFromMapHomography(const Eigen::Matrix3d& A, double cx, double cy,
 /// The inverse for the default straight-down mount: the A that a robot at T_world_robot sees.
 Eigen::Matrix3d mapHomographyFromRobotPose(const Pose2& T_world_robot, const CameraIntrinsics& intrinsics,
                                            double meters_per_pixel);
+
+/// The ground-truth robot poses of the frames whose pose line is reliable, converted as conventions.md says
+/// with the configuration's principal point and map scale.
+Trajectory groundTruthOf(const Dataset& dataset, const Config& config);
 
 /// Writes an HD Ground list: image paths (relative to the list's folder) and their A matrices.
 std::string formatHdGroundList(const std::vector<std::string>& relative_image_paths,

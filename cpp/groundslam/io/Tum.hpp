@@ -4,14 +4,9 @@
 #include <string>
 #include <vector>
 
-#include "groundslam/core/Pose2.hpp"
+#include "groundslam/core/Trajectory.hpp"
 
 namespace groundslam {
-
-struct StampedPose {
-  double timestamp = 0.0;   ///< seconds, or the frame index when the data has no time
-  Pose2 T_world_robot;
-};
 
 std::string formatTum(const std::vector<StampedPose>& poses);
 void writeTum(const std::string& path, const std::vector<StampedPose>& poses);

@@ -9,6 +9,10 @@
 #include <string>
 #include <vector>
 
+#include "groundslam/core/FeatureExtraction.hpp"
+#include "groundslam/core/Matching.hpp"
+#include "groundslam/core/RigidFit.hpp"
+
 namespace groundslam {
 
 struct CameraConfig {
@@ -25,38 +29,20 @@ struct DatasetConfig {
   std::optional<double> map_meters_per_pixel;  ///< HD Ground map scale; empty: mounting_height_m / fx
 };
 
-struct FeatureConfig {
-  int num_features = 1000;        ///< ORB keypoints kept per image
-  double scale_factor = 1.2;      ///< pyramid decimation ratio
-  int num_levels = 4;             ///< pyramid levels
-  int fast_threshold = 10;        ///< FAST corner threshold, grey levels
-  int patch_size = 31;            ///< BRIEF patch, pixels
-  int edge_threshold = 31;        ///< border without features, pixels
-  std::string score_type = "harris";  ///< harris | fast
-  int near_twin_max_distance = 0; ///< drop descriptors within this Hamming distance of another in the same image; 0 = keep all
-};
-
-struct MatchingConfig {
-  double ratio = 0.7;                   ///< Lowe ratio test threshold lambda
-  std::string method = "brute_force";   ///< brute_force | lsh
-};
-
-struct OdometryConfig {
-  std::string loss = "huber";           ///< huber | cauchy | geman_mcclure
-  double loss_scale_m = 0.0005;         ///< residual scale of the robust loss, metres
-  int min_inliers = 12;                 ///< fewer inliers than this is a failed fit
-  double ransac_inlier_m = 0.002;       ///< 2-point RANSAC inlier distance, metres
-  int ransac_iterations = 200;          ///< 2-point RANSAC hypotheses
-  int seed = 42;                        ///< seed of the RANSAC sampler
-  double fallback_covariance_scale = 1e4;  ///< covariance inflation of a fallback (failed) odometry edge
+/// What odometry assumes when a frame cannot be matched (e.g. a textureless image): the previous
+/// motion again, with this much uncertainty added, so loop closures can still correct it.
+struct FallbackSettings {
+  double sigma_m = 0.01;     ///< standard deviation added to x and y, metres
+  double sigma_rad = 0.05;   ///< standard deviation added to the heading, radians
 };
 
 struct Config {
   CameraConfig camera;
   DatasetConfig dataset;
-  FeatureConfig features;
-  MatchingConfig matching;
-  OdometryConfig odometry;
+  OrbSettings features;
+  MatcherSettings matching;
+  FitSettings odometry;
+  FallbackSettings fallback;
 };
 
 /// Allowed values of a numeric field.
@@ -95,6 +81,7 @@ void visitConfigFields(Config_& c, Visitor&& v) {
   v("features", "edge_threshold", c.features.edge_threshold, Range{0, 255});
   v("features", "score_type", c.features.score_type, Choices{"harris", "fast"});
   v("features", "near_twin_max_distance", c.features.near_twin_max_distance, Range{0, 256});
+  v("features", "subpixel_window", c.features.subpixel_window, Range{0, 15});
   v("matching", "ratio", c.matching.ratio, Range{0.0, 1.0, true});
   v("matching", "method", c.matching.method, Choices{"brute_force", "lsh"});
   v("odometry", "loss", c.odometry.loss, Choices{"huber", "cauchy", "geman_mcclure"});
@@ -103,7 +90,8 @@ void visitConfigFields(Config_& c, Visitor&& v) {
   v("odometry", "ransac_inlier_m", c.odometry.ransac_inlier_m, kPositive);
   v("odometry", "ransac_iterations", c.odometry.ransac_iterations, Range{1, 1000000});
   v("odometry", "seed", c.odometry.seed, kNonNegative);
-  v("odometry", "fallback_covariance_scale", c.odometry.fallback_covariance_scale, Range{1.0, 1e12});
+  v("odometry", "fallback_sigma_m", c.fallback.sigma_m, kPositive);
+  v("odometry", "fallback_sigma_rad", c.fallback.sigma_rad, kPositive);
 }
 
 }  // namespace groundslam

@@ -1,0 +1,29 @@
+#include "RunOutputs.hpp"
+
+#include <cstdio>
+
+namespace groundslam::apps {
+
+std::string formatFramesCsv(const std::vector<FrameResult>& results, const std::vector<double>& load_ms) {
+  std::string csv =
+      "index,timestamp,keypoints,matches,inliers,status,load_ms,extract_ms,project_ms,match_ms,fit_ms,loop_ms,"
+      "optimise_ms,total_ms\n";
+  char row[512];
+  for (size_t i = 0; i < results.size(); ++i) {
+    const FrameResult& r = results[i];
+    const StageTimes& t = r.times;
+    std::snprintf(row, sizeof(row), "%d,%.9g,%d,%d,%d,%s,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f\n", r.index, r.timestamp,
+                  r.keypoints, r.matches, r.inliers, r.status.c_str(), load_ms[i], t.extract_ms, t.project_ms, t.match_ms,
+                  t.fit_ms, t.loop_ms, t.optimise_ms, load_ms[i] + t.total_ms);
+    csv += row;
+  }
+  return csv;
+}
+
+int countFallbacks(const std::vector<FrameResult>& results) {
+  int count = 0;
+  for (const auto& r : results) count += r.status.rfind("fallback", 0) == 0 ? 1 : 0;
+  return count;
+}
+
+}  // namespace groundslam::apps

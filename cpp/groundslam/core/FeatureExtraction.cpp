@@ -1,0 +1,68 @@
+#include "groundslam/core/FeatureExtraction.hpp"
+
+#include <opencv2/imgproc.hpp>
+
+namespace groundslam {
+
+OrbExtractor::OrbExtractor(const OrbSettings& s)
+    : orb_(cv::ORB::create(s.num_features, static_cast<float>(s.scale_factor), s.num_levels, s.edge_threshold, 0, 2,
+                           s.score_type == "fast" ? cv::ORB::FAST_SCORE : cv::ORB::HARRIS_SCORE, s.patch_size,
+                           s.fast_threshold)),
+      subpixel_window_(s.subpixel_window) {}
+
+ImageFeatures OrbExtractor::detect(const cv::Mat& gray_image) const {
+  ImageFeatures features;
+  orb_->detectAndCompute(gray_image, cv::noArray(), features.keypoints, features.descriptors);
+  if (subpixel_window_ > 0 && !features.keypoints.empty()) {
+    // FAST positions are whole pixels of their pyramid level; refining them to the gradient-weighted
+    // corner reduces the noise of every fit that uses them.
+    std::vector<cv::Point2f> corners;
+    for (const auto& kp : features.keypoints) corners.push_back(kp.pt);
+    cv::cornerSubPix(gray_image, corners, cv::Size(subpixel_window_, subpixel_window_), cv::Size(-1, -1),
+                     cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 10, 0.01));
+    for (size_t i = 0; i < corners.size(); ++i) {
+      // A refinement that wanders off the keypoint is not a refinement.
+      if (cv::norm(corners[i] - features.keypoints[i].pt) <= static_cast<double>(subpixel_window_)) {
+        features.keypoints[i].pt = corners[i];
+      }
+    }
+  }
+  return features;
+}
+
+GroundFeatures projectToGround(const ImageFeatures& features, const CameraModel& camera) {
+  std::vector<Eigen::Vector2d> pixels;
+  pixels.reserve(features.keypoints.size());
+  for (const auto& kp : features.keypoints) pixels.emplace_back(kp.pt.x, kp.pt.y);
+  const auto points = camera.pixelsToGround(pixels);
+  GroundFeatures ground;
+  ground.points.reserve(points.size());
+  for (size_t i = 0; i < points.size(); ++i) {
+    if (!points[i]) continue;
+    ground.points.push_back(*points[i]);
+    ground.descriptors.push_back(features.descriptors.row(static_cast<int>(i)));
+  }
+  return ground;
+}
+
+GroundFeatures dropNearTwins(const GroundFeatures& features, int max_distance) {
+  if (max_distance <= 0 || features.size() < 2) return features;
+  const int n = static_cast<int>(features.size());
+  std::vector<bool> twin(features.size(), false);
+  for (int i = 0; i < n; ++i) {
+    for (int j = i + 1; j < n; ++j) {
+      if (cv::norm(features.descriptors.row(i), features.descriptors.row(j), cv::NORM_HAMMING) <= max_distance) {
+        twin[static_cast<size_t>(i)] = twin[static_cast<size_t>(j)] = true;
+      }
+    }
+  }
+  GroundFeatures kept;
+  for (int i = 0; i < n; ++i) {
+    if (twin[static_cast<size_t>(i)]) continue;
+    kept.points.push_back(features.points[static_cast<size_t>(i)]);
+    kept.descriptors.push_back(features.descriptors.row(i));
+  }
+  return kept;
+}
+
+}  // namespace groundslam

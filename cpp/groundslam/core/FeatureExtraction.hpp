@@ -1,0 +1,57 @@
+#pragma once
+// Paper §III-A: ORB keypoints and descriptors, projected to metric points on the ground plane.
+
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+#include <opencv2/core.hpp>
+#include <opencv2/features2d.hpp>
+
+#include "groundslam/core/CameraModel.hpp"
+
+namespace groundslam {
+
+struct OrbSettings {
+  int num_features = 1500;            ///< ORB keypoints kept per image
+  double scale_factor = 1.2;          ///< pyramid decimation ratio
+  int num_levels = 4;                 ///< pyramid levels (the camera height is fixed: few are needed)
+  int fast_threshold = 5;             ///< FAST corner threshold, grey levels (low: dark wet ground still has corners)
+  int patch_size = 31;                ///< BRIEF patch, pixels
+  int edge_threshold = 31;            ///< border without features, pixels
+  std::string score_type = "harris";  ///< harris | fast
+  int near_twin_max_distance = 0;     ///< drop descriptors this close (Hamming) to another of the same image; 0 keeps all
+  int subpixel_window = 0;            ///< half-size of the cornerSubPix window refining keypoints; 0 = off
+};
+
+/// Keypoints in pixels with their descriptors (row i describes keypoint i).
+struct ImageFeatures {
+  std::vector<cv::KeyPoint> keypoints;
+  cv::Mat descriptors;  ///< CV_8U, 32 bytes per row
+};
+
+/// Ground points in the robot frame (metres) with their descriptors (row i describes point i).
+struct GroundFeatures {
+  std::vector<Eigen::Vector2d> points;
+  cv::Mat descriptors;
+  size_t size() const { return points.size(); }
+};
+
+class OrbExtractor {
+ public:
+  explicit OrbExtractor(const OrbSettings& settings);
+  ImageFeatures detect(const cv::Mat& gray_image) const;
+
+ private:
+  cv::Ptr<cv::ORB> orb_;
+  int subpixel_window_;
+};
+
+/// Keeps the keypoints whose ray meets the ground, as metric points (pixel keypoints are not kept).
+GroundFeatures projectToGround(const ImageFeatures& features, const CameraModel& camera);
+
+/// Removes every feature whose descriptor lies within `max_distance` of another one in the same set:
+/// on repetitive floors such twins can only produce ambiguous matches.
+GroundFeatures dropNearTwins(const GroundFeatures& features, int max_distance);
+
+}  // namespace groundslam

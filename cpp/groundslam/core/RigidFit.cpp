@@ -1,0 +1,194 @@
+#include "groundslam/core/RigidFit.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <memory>
+#include <random>
+
+#include <Eigen/Eigenvalues>
+#include <ceres/ceres.h>
+
+namespace groundslam {
+namespace {
+
+/// Geman-McClure, rho(s) = s d^2 / (s + d^2) for s = r^2: bounded, so gross outliers have no pull.
+class GemanMcClureLoss : public ceres::LossFunction {
+ public:
+  explicit GemanMcClureLoss(double scale) : d2_(scale * scale) {}
+  void Evaluate(double s, double rho[3]) const override {
+    const double denom = s + d2_;
+    rho[0] = s * d2_ / denom;
+    rho[1] = d2_ * d2_ / (denom * denom);
+    rho[2] = -2.0 * d2_ * d2_ / (denom * denom * denom);
+  }
+
+ private:
+  double d2_;
+};
+
+ceres::LossFunction* makeLoss(const std::string& name, double scale) {
+  if (name == "cauchy") return new ceres::CauchyLoss(scale);
+  if (name == "geman_mcclure") return new GemanMcClureLoss(scale);
+  return new ceres::HuberLoss(scale);
+}
+
+/// r = R(theta) p_source + t - p_target, the 2-D misfit of one match (paper eq. 6).
+struct PointResidual {
+  PointResidual(const Eigen::Vector2d& target, const Eigen::Vector2d& source) : target_(target), source_(source) {}
+  template <typename T>
+  bool operator()(const T* pose, T* residual) const {
+    const T c = ceres::cos(pose[2]), s = ceres::sin(pose[2]);
+    residual[0] = c * source_.x() - s * source_.y() + pose[0] - target_.x();
+    residual[1] = s * source_.x() + c * source_.y() + pose[1] - target_.y();
+    return true;
+  }
+  Eigen::Vector2d target_, source_;
+};
+
+std::vector<int> inliersOf(const Pose2& T, const std::vector<Eigen::Vector2d>& target,
+                           const std::vector<Eigen::Vector2d>& source, double threshold) {
+  std::vector<int> inliers;
+  const double t2 = threshold * threshold;
+  for (size_t i = 0; i < target.size(); ++i) {
+    if ((T * source[i] - target[i]).squaredNorm() <= t2) inliers.push_back(static_cast<int>(i));
+  }
+  return inliers;
+}
+
+/// Closed-form least-squares rigid fit (2-D Kabsch); always a proper rotation.
+Pose2 leastSquaresFit(const std::vector<Eigen::Vector2d>& target, const std::vector<Eigen::Vector2d>& source,
+                      const std::vector<int>& subset) {
+  Eigen::Vector2d mean_t = Eigen::Vector2d::Zero(), mean_s = Eigen::Vector2d::Zero();
+  for (int i : subset) mean_t += target[static_cast<size_t>(i)], mean_s += source[static_cast<size_t>(i)];
+  mean_t /= static_cast<double>(subset.size());
+  mean_s /= static_cast<double>(subset.size());
+  double dot = 0.0, cross = 0.0;
+  for (int i : subset) {
+    const Eigen::Vector2d a = source[static_cast<size_t>(i)] - mean_s, b = target[static_cast<size_t>(i)] - mean_t;
+    dot += a.dot(b);
+    cross += a.x() * b.y() - a.y() * b.x();
+  }
+  const double theta = std::atan2(cross, dot);
+  const Eigen::Vector2d t = mean_t - Eigen::Rotation2Dd(theta) * mean_s;
+  return Pose2(t.x(), t.y(), theta);
+}
+
+/// 2-point RANSAC: the hypothesis with the most inliers; stops early once the inlier ratio makes a
+/// better one unlikely (99.9% confidence).
+std::vector<int> ransac(const std::vector<Eigen::Vector2d>& target, const std::vector<Eigen::Vector2d>& source,
+                        const FitSettings& settings) {
+  std::mt19937 rng(static_cast<std::mt19937::result_type>(settings.seed));
+  std::uniform_int_distribution<size_t> pick(0, target.size() - 1);
+  const double thr = settings.ransac_inlier_m;
+  std::vector<int> best;
+  int needed = settings.ransac_iterations;
+  for (int it = 0; it < needed; ++it) {
+    const size_t i = pick(rng), j = pick(rng);
+    const Eigen::Vector2d ds = source[j] - source[i], dt = target[j] - target[i];
+    // Too short a baseline fixes no rotation; unequal lengths cannot both be inliers of a rigid motion.
+    if (ds.norm() < 4.0 * thr || std::abs(ds.norm() - dt.norm()) > 2.0 * thr) continue;
+    const double theta = std::atan2(ds.x() * dt.y() - ds.y() * dt.x(), ds.dot(dt));
+    const Eigen::Vector2d t = 0.5 * (target[i] + target[j]) - Eigen::Rotation2Dd(theta) * (0.5 * (source[i] + source[j]));
+    std::vector<int> inliers = inliersOf(Pose2(t.x(), t.y(), theta), target, source, thr);
+    if (inliers.size() <= best.size()) continue;
+    best = std::move(inliers);
+    const double w = static_cast<double>(best.size()) / static_cast<double>(target.size());
+    const double miss = std::max(1e-12, 1.0 - w * w);
+    needed = std::min(settings.ransac_iterations, static_cast<int>(std::ceil(std::log(1e-3) / std::log(miss))) + 1);
+  }
+  return best;
+}
+
+/// True when the points lie (nearly) on a line: the fit's rotation would hang on one direction.
+bool isDegenerate(const std::vector<Eigen::Vector2d>& points, const std::vector<int>& subset, double min_spread_m) {
+  Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+  for (int i : subset) mean += points[static_cast<size_t>(i)];
+  mean /= static_cast<double>(subset.size());
+  Eigen::Matrix2d scatter = Eigen::Matrix2d::Zero();
+  for (int i : subset) {
+    const Eigen::Vector2d d = points[static_cast<size_t>(i)] - mean;
+    scatter += d * d.transpose();
+  }
+  scatter /= static_cast<double>(subset.size());
+  const double smallest = Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(scatter).eigenvalues()(0);
+  return std::sqrt(std::max(0.0, smallest)) < min_spread_m;
+}
+
+}  // namespace
+
+const char* fitStatusName(FitStatus status) {
+  switch (status) {
+    case FitStatus::ok: return "ok";
+    case FitStatus::too_few_matches: return "too_few_matches";
+    case FitStatus::too_few_inliers: return "too_few_inliers";
+    case FitStatus::degenerate: return "degenerate";
+    case FitStatus::solver_failed: return "solver_failed";
+  }
+  return "unknown";
+}
+
+double RigidEstimate::covarianceScore() const {
+  const double largest = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(covariance).eigenvalues()(2);
+  return std::log10(std::max(largest, 1e-300));
+}
+
+RigidEstimate fitRigidTransform(const std::vector<Eigen::Vector2d>& target, const std::vector<Eigen::Vector2d>& source,
+                                const FitSettings& settings) {
+  RigidEstimate estimate;
+  const size_t min_inliers = static_cast<size_t>(std::max(3, settings.min_inliers));
+  if (target.size() != source.size() || target.size() < min_inliers) return estimate;  // too_few_matches
+
+  std::vector<int> inliers = ransac(target, source, settings);
+  estimate.inliers = static_cast<int>(inliers.size());
+  if (inliers.size() < min_inliers) {
+    estimate.status = FitStatus::too_few_inliers;
+    return estimate;
+  }
+  if (isDegenerate(source, inliers, 2.0 * settings.ransac_inlier_m)) {
+    estimate.status = FitStatus::degenerate;
+    return estimate;
+  }
+  // Robust refinement over every match near the consensus, starting from its least-squares fit.
+  const Pose2 initial = leastSquaresFit(target, source, inliers);
+  const std::vector<int> refine_set = inliersOf(initial, target, source, 3.0 * settings.ransac_inlier_m);
+  double pose[3] = {initial.x, initial.y, initial.theta};
+  ceres::Problem problem;
+  ceres::LossFunction* loss = makeLoss(settings.loss, settings.loss_scale_m);  // shared, owned by the problem
+  for (int i : refine_set) {
+    problem.AddResidualBlock(new ceres::AutoDiffCostFunction<PointResidual, 2, 3>(
+                                 new PointResidual(target[static_cast<size_t>(i)], source[static_cast<size_t>(i)])),
+                             loss, pose);
+  }
+  ceres::Solver::Options options;
+  options.linear_solver_type = ceres::DENSE_QR;
+  options.max_num_iterations = 25;
+  options.num_threads = 1;
+  ceres::Solver::Summary summary;
+  ceres::Solve(options, &problem, &summary);
+  ceres::Covariance::Options covariance_options;
+  covariance_options.algorithm_type = ceres::DENSE_SVD;
+  ceres::Covariance covariance(covariance_options);
+  std::vector<std::pair<const double*, const double*>> blocks = {{pose, pose}};
+  if (!summary.IsSolutionUsable() || !covariance.Compute(blocks, &problem)) {
+    estimate.status = FitStatus::solver_failed;
+    return estimate;
+  }
+  estimate.T_target_source = Pose2(pose[0], pose[1], pose[2]);
+  Eigen::Matrix<double, 3, 3, Eigen::RowMajor> unit_covariance;
+  covariance.GetCovarianceBlock(pose, pose, unit_covariance.data());
+
+  // Ceres assumes unit residual variance; scale by the fit's own residual variance.
+  inliers = inliersOf(estimate.T_target_source, target, source, settings.ransac_inlier_m);
+  double sum_squares = 0.0;
+  for (int i : inliers) {
+    sum_squares += (estimate.T_target_source * source[static_cast<size_t>(i)] - target[static_cast<size_t>(i)]).squaredNorm();
+  }
+  const double dof = std::max(1.0, 2.0 * static_cast<double>(inliers.size()) - 3.0);
+  estimate.inliers = static_cast<int>(inliers.size());
+  estimate.rms_residual_m = std::sqrt(sum_squares / static_cast<double>(std::max<size_t>(1, inliers.size())));
+  estimate.covariance = unit_covariance * (sum_squares / dof);
+  estimate.status = inliers.size() < min_inliers ? FitStatus::too_few_inliers : FitStatus::ok;
+  return estimate;
+}
+
+}  // namespace groundslam

@@ -1,0 +1,43 @@
+#pragma once
+// Paper §III-B2: the SE(2) transform that maps one set of ground points onto its matches, under a
+// robust M-estimator (Huber, Cauchy or Geman-McClure) solved with Ceres, with its covariance.
+// The paper starts the solver at identity, which fails for large rotations; we start it from a
+// 2-point RANSAC estimate, so any heading works (revisits at 180 degrees included).
+
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "groundslam/core/Pose2.hpp"
+
+namespace groundslam {
+
+struct FitSettings {
+  std::string loss = "huber";    ///< huber | cauchy | geman_mcclure
+  double loss_scale_m = 0.0005;  ///< residual at which the robust loss starts to down-weight, metres
+  int min_inliers = 12;          ///< fewer inliers than this is a failed fit
+  double ransac_inlier_m = 0.002;  ///< RANSAC inlier distance, metres
+  int ransac_iterations = 200;   ///< most RANSAC hypotheses (fewer when the inlier ratio allows)
+  int seed = 42;                 ///< seed of the RANSAC sampler
+};
+
+enum class FitStatus { ok, too_few_matches, too_few_inliers, degenerate, solver_failed };
+const char* fitStatusName(FitStatus status);
+
+struct RigidEstimate {
+  FitStatus status = FitStatus::too_few_matches;
+  Pose2 T_target_source;        ///< maps source points onto target points: p_target = T * p_source
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Identity();  ///< of (x, y, theta); m^2, m rad, rad^2
+  int inliers = 0;              ///< matches within the RANSAC inlier distance of the final fit
+  double rms_residual_m = 0.0;  ///< over the inliers
+  bool ok() const { return status == FitStatus::ok; }
+  /// The paper's covariance score (§III-C3): log10 of the largest eigenvalue of the covariance.
+  double covarianceScore() const;
+};
+
+/// Fits T with target[i] ~ T * source[i] for matched pairs. Failure is a status, never an exception.
+RigidEstimate fitRigidTransform(const std::vector<Eigen::Vector2d>& target, const std::vector<Eigen::Vector2d>& source,
+                                const FitSettings& settings);
+
+}  // namespace groundslam

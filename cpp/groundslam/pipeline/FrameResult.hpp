@@ -1,0 +1,33 @@
+#pragma once
+// What the pipeline reports for each processed frame.
+
+#include <string>
+
+#include "groundslam/core/Pose2.hpp"
+
+namespace groundslam {
+
+/// Milliseconds spent in each stage of one frame.
+struct StageTimes {
+  double extract_ms = 0.0;   ///< ORB detection and description
+  double project_ms = 0.0;   ///< keypoints to ground points
+  double match_ms = 0.0;     ///< descriptor matching to the previous frame
+  double fit_ms = 0.0;       ///< robust SE(2) fit and covariance
+  double loop_ms = 0.0;      ///< loop-closure search and verification
+  double optimise_ms = 0.0;  ///< pose-graph optimisation
+  double total_ms = 0.0;
+};
+
+struct FrameResult {
+  int index = 0;
+  double timestamp = 0.0;
+  int keypoints = 0;          ///< ground points kept
+  int matches = 0;            ///< ratio-test matches to the previous frame
+  int inliers = 0;            ///< matches consistent with the fitted motion
+  std::string status;         ///< first | ok | fallback_<reason>
+  Pose2 T_world_robot;        ///< the estimate when the frame was processed
+  int loop_closures = 0;      ///< accepted loop closures of this frame
+  StageTimes times;
+};
+
+}  // namespace groundslam

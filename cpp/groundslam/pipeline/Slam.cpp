@@ -1,0 +1,126 @@
+#include "groundslam/pipeline/Slam.hpp"
+
+#include <chrono>
+
+namespace groundslam {
+namespace {
+
+/// Milliseconds since the last call (or construction).
+class StageTimer {
+ public:
+  double lap() {
+    const auto now = std::chrono::steady_clock::now();
+    const double ms = std::chrono::duration<double, std::milli>(now - last_).count();
+    last_ = now;
+    return ms;
+  }
+
+ private:
+  std::chrono::steady_clock::time_point last_ = std::chrono::steady_clock::now();
+};
+
+/// Splits matched features into the two point lists a rigid fit takes.
+std::pair<std::vector<Eigen::Vector2d>, std::vector<Eigen::Vector2d>> matchedPoints(const std::vector<Match>& matches,
+                                                                                    const GroundFeatures& query,
+                                                                                    const GroundFeatures& train) {
+  std::vector<Eigen::Vector2d> train_points, query_points;
+  for (const Match& m : matches) {
+    train_points.push_back(train.points[static_cast<size_t>(m.train)]);
+    query_points.push_back(query.points[static_cast<size_t>(m.query)]);
+  }
+  return {train_points, query_points};
+}
+
+}  // namespace
+
+CameraModel cameraModelFrom(const CameraConfig& c) {
+  CameraIntrinsics k;
+  k.width = c.image_width;
+  k.height = c.image_height;
+  k.fx = c.fx;
+  k.fy = c.fy;
+  k.cx = c.cx;
+  k.cy = c.cy;
+  k.distortion = c.distortion;
+  Eigen::Isometry3d T_robot_camera = defaultCameraMount(c.mounting_height_m);
+  if (c.T_robot_camera) {
+    const Eigen::Matrix<double, 4, 4, Eigen::RowMajor> T(c.T_robot_camera->data());
+    T_robot_camera.matrix() = T;
+  }
+  return CameraModel(k, T_robot_camera);
+}
+
+Slam::Slam(const Config& config)
+    : config_(config),
+      camera_(cameraModelFrom(config.camera)),
+      extractor_(config.features),
+      matcher_(config.matching) {}
+
+FrameResult Slam::process(const cv::Mat& image, double timestamp) {
+  StageTimer total;
+  FrameResult result;
+  result.index = static_cast<int>(poses_.size());
+  result.timestamp = timestamp;
+
+  // §III-A: ORB keypoints and descriptors, projected to metric points on the ground plane (eqs. 2-4).
+  Keyframe current = extractKeyframe(image, timestamp, result);
+
+  // §III-B: match to the previous image and fit T_prev_curr with a robust M-estimator (eqs. 5-6).
+  Pose2 T_world_robot;
+  if (previous_) {
+    const OdometryEdge odometry = estimateOdometry(*previous_, current, result);
+    if (!odometry.fallback) last_good_odometry_ = odometry;
+    T_world_robot = poses_.back().T_world_robot * odometry.T_prev_curr;
+    result.status = odometry.fallback ? std::string("fallback_") + fitStatusName(odometry.fit_status) : "ok";
+  } else {
+    result.status = "first";
+  }
+  poses_.push_back({timestamp, T_world_robot});
+  result.T_world_robot = T_world_robot;
+  previous_ = std::move(current);
+  result.times.total_ms = total.lap();
+  return result;
+}
+
+Keyframe Slam::extractKeyframe(const cv::Mat& image, double timestamp, FrameResult& result) const {
+  StageTimer timer;
+  const ImageFeatures image_features = extractor_.detect(image);
+  result.times.extract_ms = timer.lap();
+  Keyframe keyframe{result.index, timestamp,
+                    dropNearTwins(projectToGround(image_features, camera_), config_.features.near_twin_max_distance)};
+  result.times.project_ms = timer.lap();
+  result.keypoints = static_cast<int>(keyframe.features.size());
+  return keyframe;
+}
+
+OdometryEdge Slam::estimateOdometry(const Keyframe& previous, const Keyframe& current, FrameResult& result) const {
+  StageTimer timer;
+  const std::vector<Match> matches = matcher_.match(current.features.descriptors, previous.features.descriptors);
+  result.times.match_ms = timer.lap();
+  const auto [previous_points, current_points] = matchedPoints(matches, current.features, previous.features);
+  const RigidEstimate fit = fitRigidTransform(previous_points, current_points, config_.odometry);
+  result.times.fit_ms = timer.lap();
+  result.matches = static_cast<int>(matches.size());
+  result.inliers = fit.inliers;
+
+  OdometryEdge edge{fit.T_target_source, fit.covariance, result.matches, fit.inliers, fit.status, false};
+  return fit.ok() ? edge : fallbackOdometry(edge);
+}
+
+OdometryEdge Slam::fallbackOdometry(OdometryEdge failed) const {
+  // The paper's code assumes the previous motion again; its uncertainty grows by the fallback sigmas.
+  failed.fallback = true;
+  failed.T_prev_curr = Pose2();
+  failed.covariance = Eigen::Matrix3d::Zero();
+  if (last_good_odometry_) {
+    failed.T_prev_curr = last_good_odometry_->T_prev_curr;
+    failed.covariance = last_good_odometry_->covariance;
+  }
+  const double sm = config_.fallback.sigma_m, sr = config_.fallback.sigma_rad;
+  failed.covariance += Eigen::Vector3d(sm * sm, sm * sm, sr * sr).asDiagonal();
+  return failed;
+}
+
+Trajectory Slam::trajectory() const { return poses_; }
+
+}  // namespace groundslam

@@ -1,0 +1,88 @@
+#include <random>
+
+#include <gtest/gtest.h>
+#include <opencv2/imgproc.hpp>
+
+#include "groundslam/core/FeatureExtraction.hpp"
+#include "groundslam/core/Matching.hpp"
+
+using namespace groundslam;
+
+namespace {
+
+cv::Mat randomDescriptors(int n, unsigned seed) {
+  cv::Mat d(n, 32, CV_8U);
+  cv::RNG rng(seed);
+  rng.fill(d, cv::RNG::UNIFORM, 0, 256);
+  return d;
+}
+
+/// Flips `bits` random bits of a descriptor row.
+cv::Mat flipBits(const cv::Mat& row, int bits, std::mt19937& rng) {
+  cv::Mat out = row.clone();
+  std::uniform_int_distribution<int> pick(0, 255);
+  for (int b = 0; b < bits; ++b) {
+    const int bit = pick(rng);
+    out.at<unsigned char>(0, bit / 8) = static_cast<unsigned char>(out.at<unsigned char>(0, bit / 8) ^ (1 << (bit % 8)));
+  }
+  return out;
+}
+
+}  // namespace
+
+TEST(Matching, RatioTestKeepsDistinctMatchesAndDropsAmbiguousOnes) {
+  std::mt19937 rng(1);
+  const cv::Mat train = randomDescriptors(200, 7);
+  cv::Mat query;
+  for (int i = 0; i < 100; ++i) query.push_back(flipBits(train.row(2 * i), 10, rng));  // close to train 2i
+  // An ambiguous query: train rows 0 and 1 made equidistant twins of it.
+  cv::Mat ambiguous_train = train.clone();
+  flipBits(train.row(0), 0, rng).copyTo(ambiguous_train.row(1));
+  for (const std::string method : {"brute_force", "lsh"}) {
+    DescriptorMatcher matcher({0.7, method});
+    const auto matches = matcher.match(query, train);
+    int correct = 0;
+    for (const auto& m : matches) correct += (m.train == 2 * m.query) ? 1 : 0;
+    EXPECT_GE(correct, method == "lsh" ? 90 : 100) << method;
+    EXPECT_EQ(correct, static_cast<int>(matches.size())) << method;
+    const auto twin_matches = DescriptorMatcher({0.7, "brute_force"}).match(query.row(0), ambiguous_train);
+    EXPECT_TRUE(twin_matches.empty());
+  }
+}
+
+TEST(Matching, EmptyAndTinyInputsGiveNoMatches) {
+  DescriptorMatcher matcher({0.7, "brute_force"});
+  EXPECT_TRUE(matcher.match(cv::Mat(), randomDescriptors(10, 1)).empty());
+  EXPECT_TRUE(matcher.match(randomDescriptors(10, 1), randomDescriptors(1, 2)).empty());
+}
+
+TEST(Features, NearTwinsAreDropped) {
+  std::mt19937 rng(3);
+  GroundFeatures f;
+  f.descriptors = randomDescriptors(20, 4);
+  f.descriptors.push_back(flipBits(f.descriptors.row(5), 3, rng));  // a twin of row 5
+  for (int i = 0; i < 21; ++i) f.points.emplace_back(i, 0.0);
+  const GroundFeatures kept = dropNearTwins(f, 10);
+  EXPECT_EQ(kept.size(), 19u);  // both twins go
+  for (const auto& p : kept.points) EXPECT_TRUE(p.x() != 5.0 && p.x() != 20.0);
+  EXPECT_EQ(dropNearTwins(f, 0).size(), 21u);
+}
+
+TEST(Features, OrbPointsProjectToTheGround) {
+  cv::Mat image(240, 320, CV_8U, cv::Scalar(90));
+  cv::RNG rng(5);
+  for (int i = 0; i < 150; ++i) {
+    cv::circle(image, {rng.uniform(20, 300), rng.uniform(20, 220)}, rng.uniform(2, 6), cv::Scalar(rng.uniform(150, 255)), -1);
+  }
+  CameraIntrinsics k;
+  k.width = 320, k.height = 240, k.fx = k.fy = 440.0, k.cx = 160.0, k.cy = 120.0;
+  const CameraModel camera(k, defaultCameraMount(0.25));
+  const ImageFeatures features = OrbExtractor(OrbSettings{}).detect(image);
+  ASSERT_GT(features.keypoints.size(), 50u);
+  const GroundFeatures ground = projectToGround(features, camera);
+  ASSERT_EQ(ground.size(), features.keypoints.size());
+  EXPECT_EQ(ground.descriptors.rows, static_cast<int>(ground.size()));
+  const auto& kp = features.keypoints.front().pt;
+  EXPECT_NEAR(ground.points.front().x(), (kp.x - 160.0) / 440.0 * 0.25, 1e-6);
+  EXPECT_NEAR(ground.points.front().y(), -(kp.y - 120.0) / 440.0 * 0.25, 1e-6);
+}
