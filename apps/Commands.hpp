@@ -7,5 +7,6 @@ namespace groundslam::apps {
 void addSimulateCommand(CLI::App& app);
 void addRunCommand(CLI::App& app);
 void addEvaluateCommand(CLI::App& app);
+void addVocabularyCommand(CLI::App& app);
 
 }  // namespace groundslam::apps

@@ -1,6 +1,5 @@
 // `groundslam run DATASET`: runs SLAM on a sequence and writes the results into a run folder.
 #include <chrono>
-#include <cstdio>
 #include <filesystem>
 #include <iostream>
 #include <memory>
@@ -8,11 +7,14 @@
 #include "Commands.hpp"
 #include "Progress.hpp"
 #include "RunOutputs.hpp"
+#include "groundslam/eval/LoopClosureMetrics.hpp"
 #include "groundslam/eval/TrajectoryMetrics.hpp"
 #include "groundslam/io/ConfigYaml.hpp"
 #include "groundslam/io/Dataset.hpp"
 #include "groundslam/io/Files.hpp"
+#include "groundslam/io/RunFiles.hpp"
 #include "groundslam/io/Tum.hpp"
+#include "groundslam/io/VocabularyFile.hpp"
 #include "groundslam/pipeline/Slam.hpp"
 
 namespace fs = std::filesystem;
@@ -31,22 +33,20 @@ Config loadRunConfig(const Dataset& dataset, const RunOptions& o) {
   std::vector<std::string> layers;
   if (dataset.camera_yaml) layers.push_back(*dataset.camera_yaml);
   if (!o.config.empty()) layers.push_back(o.config);
-  return loadConfig(layers);
+  Config config = loadConfig(layers);
+  if (o.no_loop_closure) config.loop_closure.enabled = false;
+  return config;
 }
 
-void run(const RunOptions& o) {
-  const Dataset dataset = openDataset(o.dataset);
-  const Config config = loadRunConfig(dataset, o);
-  fs::create_directories(o.out_dir);
-  // A result folder must never mix a new configuration with an old trajectory.
-  for (const char* stale : {"trajectory.tum", "groundtruth.tum", "frames.csv", "metrics.json"}) {
-    fs::remove(fs::path(o.out_dir) / stale);
-  }
-  writeFileAtomically((fs::path(o.out_dir) / "config.yaml").string(), configToYaml(config));
+std::shared_ptr<const Vocabulary> loadVocabulary(const Config& config) {
+  if (!config.loop_closure.enabled) return nullptr;
+  const std::string path = config.loop_closure.vocabulary.empty() ? defaultVocabularyPath() : config.loop_closure.vocabulary;
+  return std::make_shared<const Vocabulary>(readVocabulary(path));
+}
 
-  Slam slam(config);
+/// Runs every frame through the pipeline, with a progress line on a terminal.
+std::vector<FrameResult> processAll(const Dataset& dataset, const Config& config, Slam& slam, std::vector<double>& load_ms) {
   std::vector<FrameResult> results;
-  std::vector<double> load_ms;
   Progress progress("run", static_cast<int>(dataset.frames.size()));
   for (const DatasetFrame& frame : dataset.frames) {
     const auto start = std::chrono::steady_clock::now();
@@ -55,19 +55,46 @@ void run(const RunOptions& o) {
     results.push_back(slam.process(image, frame.timestamp));
     progress.update(static_cast<int>(results.size()));
   }
+  slam.finish();
   progress.finish();
+  return results;
+}
 
+void run(const RunOptions& o) {
+  const Dataset dataset = openDataset(o.dataset);
+  const Config config = loadRunConfig(dataset, o);
+  Slam slam(config, loadVocabulary(config));
   const fs::path out(o.out_dir);
+  fs::create_directories(out);
+  // A result folder must never mix a new configuration with an old trajectory.
+  for (const char* stale : {"trajectory.tum", "groundtruth.tum", "frames.csv", "metrics.json", "loop_closures.csv",
+                            "candidates.csv", "graph.g2o"}) {
+    fs::remove(out / stale);
+  }
+  writeFileAtomically((out / "config.yaml").string(), configToYaml(config));
+
+  std::vector<double> load_ms;
+  const std::vector<FrameResult> results = processAll(dataset, config, slam, load_ms);
+  const Trajectory trajectory = slam.trajectory();
   writeFileAtomically((out / "frames.csv").string(), formatFramesCsv(results, load_ms));
-  writeTum((out / "trajectory.tum").string(), slam.trajectory());
-  std::cout << "processed " << results.size() << " frames (" << countFallbacks(results) << " with fallback odometry)\n";
+  writeFileAtomically((out / "loop_closures.csv").string(), formatLoopClosuresCsv(slam.loopCandidates()));
+  writeFileAtomically((out / "graph.g2o").string(), formatG2o(slam.graph()));
+  std::cout << "processed " << results.size() << " frames (" << countFallbacks(results) << " with fallback odometry, "
+            << countLoopClosures(results) << " loop closures)\n";
+  std::vector<std::optional<CandidateTruth>> truths;
   if (dataset.hasGroundTruth()) {
     const Trajectory groundtruth = groundTruthOf(dataset, config);
     writeTum((out / "groundtruth.tum").string(), groundtruth);
-    const TrajectoryMetrics metrics = evaluateTrajectory(groundtruth, slam.trajectory()).metrics;
-    writeFileAtomically((out / "metrics.json").string(), metricsToJson(metrics));
-    std::cout << metricsToText(metrics);
+    std::vector<double> timestamps;
+    for (const auto& p : trajectory) timestamps.push_back(p.timestamp);
+    truths = candidateTruths(slam.loopCandidates(), timestamps, groundtruth, cameraModelFrom(config.camera).groundFootprint());
+    const TrajectoryMetrics metrics = evaluateTrajectory(groundtruth, trajectory).metrics;
+    const LoopClosureMetrics loops = summariseLoopClosures(slam.loopCandidates(), truths);
+    writeFileAtomically((out / "metrics.json").string(), runMetricsJson(metrics, loops));
+    std::cout << metricsToText(metrics) << loopMetricsToText(loops);
   }
+  writeFileAtomically((out / "candidates.csv").string(), formatCandidatesCsv(slam.loopCandidates(), truths));
+  writeTum((out / "trajectory.tum").string(), trajectory);  // last: its presence marks a finished run
   std::cout << "results in " << out.string() << "\n";
 }
 
@@ -79,7 +106,7 @@ void addRunCommand(CLI::App& app) {
   cmd->add_option("DATASET", o->dataset, "HD Ground list (.txt/.test) or image folder")->required();
   cmd->add_option("--config", o->config, "Configuration YAML, applied over camera.yaml beside the dataset");
   cmd->add_option("--out", o->out_dir, "Run folder for the results")->capture_default_str();
-  cmd->add_flag("--no-loop-closure", o->no_loop_closure, "Odometry only");
+  cmd->add_flag("--no-loop-closure", o->no_loop_closure, "Odometry only (sets loop_closure.enabled = false)");
   cmd->callback([o]() { run(*o); });
 }
 

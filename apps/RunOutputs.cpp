@@ -20,6 +20,28 @@ std::string formatFramesCsv(const std::vector<FrameResult>& results, const std::
   return csv;
 }
 
+int countLoopClosures(const std::vector<FrameResult>& results) {
+  int count = 0;
+  for (const auto& r : results) count += r.loop_closures;
+  return count;
+}
+
+std::string runMetricsJson(const TrajectoryMetrics& trajectory, const LoopClosureMetrics& loops) {
+  std::string json = metricsToJson(trajectory);
+  const size_t end = json.rfind('}');
+  std::string loop_json = loopMetricsToJson(loops);
+  // Indent the nested object by two spaces.
+  std::string nested;
+  for (char ch : loop_json) nested += ch == '\n' ? std::string("\n  ") : std::string(1, ch);
+  json = json.substr(0, json.rfind('\n', end - 1)) + ",\n  \"loop_closure\": " + nested + "\n}\n";
+  return json;
+}
+
+std::string defaultVocabularyPath() {
+  // The copy in the source tree (config/vocabulary/), fixed at build time.
+  return GROUNDSLAM_DEFAULT_VOCABULARY;
+}
+
 int countFallbacks(const std::vector<FrameResult>& results) {
   int count = 0;
   for (const auto& r : results) count += r.status.rfind("fallback", 0) == 0 ? 1 : 0;

@@ -1,8 +1,10 @@
 #pragma once
-// Formatting of a run's per-frame table.
+// Formatting of a run's per-frame table and metrics.
 #include <string>
 #include <vector>
 
+#include "groundslam/eval/LoopClosureMetrics.hpp"
+#include "groundslam/eval/TrajectoryMetrics.hpp"
 #include "groundslam/pipeline/FrameResult.hpp"
 
 namespace groundslam::apps {
@@ -10,5 +12,10 @@ namespace groundslam::apps {
 /// `frames.csv`: index,timestamp,keypoints,matches,inliers,status, then per-stage milliseconds, total_ms.
 std::string formatFramesCsv(const std::vector<FrameResult>& results, const std::vector<double>& load_ms);
 int countFallbacks(const std::vector<FrameResult>& results);
+int countLoopClosures(const std::vector<FrameResult>& results);
+/// `metrics.json`: the trajectory metrics with the loop-closure metrics under "loop_closure".
+std::string runMetricsJson(const TrajectoryMetrics& trajectory, const LoopClosureMetrics& loops);
+/// The path of the vocabulary shipped with groundslam.
+std::string defaultVocabularyPath();
 
 }  // namespace groundslam::apps

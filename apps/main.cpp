@@ -14,6 +14,7 @@ int main(int argc, char** argv) {
   groundslam::apps::addSimulateCommand(app);
   groundslam::apps::addRunCommand(app);
   groundslam::apps::addEvaluateCommand(app);
+  groundslam::apps::addVocabularyCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -32,6 +32,11 @@ sed -i '2s/.*/1 2 3/' "$tmp/seq_bad/sequence.txt"
 expect_error "malformed pose line" "sequence.txt:2: expected 9 numbers" "$bin" run "$tmp/seq_bad/sequence.txt" --out "$tmp/run"
 expect_error "unknown subcommand option" "--frobnicate" "$bin" simulate "$tmp/x" --frobnicate
 expect_error "bad resolution" "--resolution" "$bin" simulate "$tmp/x" --resolution 12by4
+head -c 1000 /dev/urandom >"$tmp/garbage.gslmvoc"
+printf 'loop_closure:\n  vocabulary: %s\n' "$tmp/garbage.gslmvoc" >"$tmp/bad_vocabulary.yaml"
+expect_error "corrupt vocabulary" "garbage.gslmvoc: not a groundslam vocabulary file" "$bin" run "$tmp/seq/sequence.txt" --config "$tmp/bad_vocabulary.yaml" --out "$tmp/run"
+expect_error "vocabulary from nothing" "nothing.txt" "$bin" vocabulary train "$tmp/seq/nothing.txt" -o "$tmp/v.gslmvoc"
+expect_error "evaluate a folder without ground truth" "groundtruth.tum" "$bin" evaluate "$tmp/seq/images"
 [ -d "$tmp/run" ] && [ -f "$tmp/run/trajectory.tum" ] && { echo "FAIL: a failed run left a trajectory"; failures=$((failures + 1)); }
 echo "$passes passed, $failures failed"
 [ $failures -eq 0 ]

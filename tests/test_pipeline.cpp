@@ -37,7 +37,7 @@ TEST(Slam, OdometryFollowsASimulatedRandomWalk) {
   settings.path.frames = 80;
   settings.photometry.noise_sigma = 2.0;
   const sim::SequenceSimulator simulator(settings);
-  Slam slam(configFor(settings));
+  Slam slam(configFor(settings), nullptr);  // odometry only
   for (int i = 0; i < simulator.frameCount(); ++i) {
     const FrameResult r = slam.process(simulator.renderFrame(i), i);
     EXPECT_EQ(r.status, i == 0 ? "first" : "ok") << i;
@@ -58,7 +58,7 @@ TEST(Slam, TexturelessFrameFallsBackToThePreviousMotion) {
   settings.path.kind = sim::PathKind::lawnmower;  // the first lane is straight: constant motion
   settings.path.frames = 12;
   const sim::SequenceSimulator simulator(settings);
-  Slam slam(configFor(settings));
+  Slam slam(configFor(settings), nullptr);  // odometry only
   const cv::Mat blank(settings.camera.height, settings.camera.width, CV_8U, cv::Scalar(128));
   std::vector<FrameResult> results;
   for (int i = 0; i < simulator.frameCount(); ++i) {

@@ -84,6 +84,22 @@ std::optional<Eigen::Vector2d> CameraModel::groundToPixel(const Eigen::Vector2d&
   return Eigen::Vector2d(intrinsics_.fx * xd + intrinsics_.cx, intrinsics_.fy * yd + intrinsics_.cy);
 }
 
+std::vector<Eigen::Vector2d> CameraModel::groundFootprint() const {
+  const double w = intrinsics_.width - 0.5, h = intrinsics_.height - 0.5;
+  std::vector<Eigen::Vector2d> border;
+  constexpr int kPerSide = 8;  // several points per side follow a distorted border
+  for (int i = 0; i < kPerSide; ++i) border.emplace_back(-0.5 + (w + 0.5) * i / kPerSide, -0.5);
+  for (int i = 0; i < kPerSide; ++i) border.emplace_back(w, -0.5 + (h + 0.5) * i / kPerSide);
+  for (int i = 0; i < kPerSide; ++i) border.emplace_back(w - (w + 0.5) * i / kPerSide, h);
+  for (int i = 0; i < kPerSide; ++i) border.emplace_back(-0.5, h - (h + 0.5) * i / kPerSide);
+  std::vector<Eigen::Vector2d> polygon;
+  for (const auto& p : pixelsToGround(border)) {
+    if (!p) return {};
+    polygon.push_back(*p);
+  }
+  return polygon;
+}
+
 double CameraModel::groundSampleDistance() const {
   const Eigen::Vector2d centre(intrinsics_.cx, intrinsics_.cy);
   const auto a = pixelToGround(centre);

@@ -45,6 +45,10 @@ class CameraModel {
   /// Pixel at which a ground point (robot frame) is seen, with distortion; empty when behind the camera.
   std::optional<Eigen::Vector2d> groundToPixel(const Eigen::Vector2d& p_robot) const;
 
+  /// The image's footprint on the ground (robot frame): the border pixels' ground points, a convex polygon
+  /// for a downward camera. Empty when part of the border looks above the horizon.
+  std::vector<Eigen::Vector2d> groundFootprint() const;
+
   /// Metres on the ground per pixel at the image centre (used to size simulated textures and maps).
   double groundSampleDistance() const;
 

@@ -73,14 +73,31 @@ Pose2 leastSquaresFit(const std::vector<Eigen::Vector2d>& target, const std::vec
   return Pose2(t.x(), t.y(), theta);
 }
 
-/// 2-point RANSAC: the hypothesis with the most inliers; stops early once the inlier ratio makes a
-/// better one unlikely (99.9% confidence).
-std::vector<int> ransac(const std::vector<Eigen::Vector2d>& target, const std::vector<Eigen::Vector2d>& source,
-                        const FitSettings& settings) {
+struct Hypothesis {
+  Pose2 T;
+  int support = 0;
+};
+
+struct RansacResult {
+  std::vector<int> inliers;  ///< of the best hypothesis
+  Pose2 best;
+  int rival_support = 0;     ///< the best hypothesis far from `best`
+};
+
+/// True when two transforms are different explanations, not the same one seen through noise.
+bool farApart(const Pose2& a, const Pose2& b) {
+  return (a.translation() - b.translation()).norm() > 0.01 || std::abs(wrapAngle(a.theta - b.theta)) > 3.0 * M_PI / 180.0;
+}
+
+/// 2-point RANSAC: the hypothesis with the most inliers. Stops early once the inlier ratio makes a
+/// better one unlikely (99.9% confidence), unless every hypothesis is wanted to measure ambiguity.
+RansacResult ransac(const std::vector<Eigen::Vector2d>& target, const std::vector<Eigen::Vector2d>& source,
+                    const FitSettings& settings) {
   std::mt19937 rng(static_cast<std::mt19937::result_type>(settings.seed));
   std::uniform_int_distribution<size_t> pick(0, target.size() - 1);
   const double thr = settings.ransac_inlier_m;
-  std::vector<int> best;
+  RansacResult result;
+  std::vector<Hypothesis> tried;
   int needed = settings.ransac_iterations;
   for (int it = 0; it < needed; ++it) {
     const size_t i = pick(rng), j = pick(rng);
@@ -89,14 +106,21 @@ std::vector<int> ransac(const std::vector<Eigen::Vector2d>& target, const std::v
     if (ds.norm() < 4.0 * thr || std::abs(ds.norm() - dt.norm()) > 2.0 * thr) continue;
     const double theta = std::atan2(ds.x() * dt.y() - ds.y() * dt.x(), ds.dot(dt));
     const Eigen::Vector2d t = 0.5 * (target[i] + target[j]) - Eigen::Rotation2Dd(theta) * (0.5 * (source[i] + source[j]));
-    std::vector<int> inliers = inliersOf(Pose2(t.x(), t.y(), theta), target, source, thr);
-    if (inliers.size() <= best.size()) continue;
-    best = std::move(inliers);
-    const double w = static_cast<double>(best.size()) / static_cast<double>(target.size());
+    const Pose2 T(t.x(), t.y(), theta);
+    std::vector<int> inliers = inliersOf(T, target, source, thr);
+    if (settings.measure_ambiguity) tried.push_back({T, static_cast<int>(inliers.size())});
+    if (inliers.size() <= result.inliers.size()) continue;
+    result.inliers = std::move(inliers);
+    result.best = T;
+    if (settings.measure_ambiguity) continue;
+    const double w = static_cast<double>(result.inliers.size()) / static_cast<double>(target.size());
     const double miss = std::max(1e-12, 1.0 - w * w);
     needed = std::min(settings.ransac_iterations, static_cast<int>(std::ceil(std::log(1e-3) / std::log(miss))) + 1);
   }
-  return best;
+  for (const Hypothesis& h : tried) {
+    if (farApart(h.T, result.best)) result.rival_support = std::max(result.rival_support, h.support);
+  }
+  return result;
 }
 
 /// True when the points lie (nearly) on a line: the fit's rotation would hang on one direction.
@@ -138,8 +162,10 @@ RigidEstimate fitRigidTransform(const std::vector<Eigen::Vector2d>& target, cons
   const size_t min_inliers = static_cast<size_t>(std::max(3, settings.min_inliers));
   if (target.size() != source.size() || target.size() < min_inliers) return estimate;  // too_few_matches
 
-  std::vector<int> inliers = ransac(target, source, settings);
+  const RansacResult consensus = ransac(target, source, settings);
+  std::vector<int> inliers = consensus.inliers;
   estimate.inliers = static_cast<int>(inliers.size());
+  estimate.rival_inliers = consensus.rival_support;
   if (inliers.size() < min_inliers) {
     estimate.status = FitStatus::too_few_inliers;
     return estimate;

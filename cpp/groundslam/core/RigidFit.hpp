@@ -20,6 +20,7 @@ struct FitSettings {
   double ransac_inlier_m = 0.002;  ///< RANSAC inlier distance, metres
   int ransac_iterations = 200;   ///< most RANSAC hypotheses (fewer when the inlier ratio allows)
   int seed = 42;                 ///< seed of the RANSAC sampler
+  bool measure_ambiguity = false;  ///< run every RANSAC hypothesis and report the best rival transform's support
 };
 
 enum class FitStatus { ok, too_few_matches, too_few_inliers, degenerate, solver_failed };
@@ -31,7 +32,12 @@ struct RigidEstimate {
   Eigen::Matrix3d covariance = Eigen::Matrix3d::Identity();  ///< of (x, y, theta); m^2, m rad, rad^2
   int inliers = 0;              ///< matches within the RANSAC inlier distance of the final fit
   double rms_residual_m = 0.0;  ///< over the inliers
+  /// Support of the best RANSAC hypothesis far from the chosen one (> 1 cm or > 3 degrees away); only with
+  /// measure_ambiguity. A repetitive floor (tiles) fits several offsets almost equally well.
+  int rival_inliers = 0;
   bool ok() const { return status == FitStatus::ok; }
+  /// rival_inliers / inliers: near 1 when another transform explains the matches as well.
+  double ambiguity() const { return inliers > 0 ? static_cast<double>(rival_inliers) / inliers : 1.0; }
   /// The paper's covariance score (§III-C3): log10 of the largest eigenvalue of the covariance.
   double covarianceScore() const;
 };

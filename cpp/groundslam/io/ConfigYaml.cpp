@@ -92,12 +92,21 @@ class FieldReader {
   void read(const YAML::Node& node, const std::string& name, std::string& field, const Choices& choices) const {
     if (!node.IsScalar()) fail(source_, node, name, "expected a string");
     const std::string value = node.Scalar();
-    if (std::find(choices.begin(), choices.end(), value) == choices.end()) {
+    if (!choices.empty() && std::find(choices.begin(), choices.end(), value) == choices.end()) {
       std::string allowed;
       for (const auto& choice : choices) allowed += (allowed.empty() ? "" : ", ") + choice;
       fail(source_, node, name, "'" + value + "' is not one of: " + allowed);
     }
     field = value;
+  }
+
+  void read(const YAML::Node& node, const std::string& name, bool& field, const Range&) const {
+    if (!node.IsScalar()) fail(source_, node, name, "expected true or false");
+    try {
+      field = node.as<bool>();
+    } catch (const YAML::Exception&) {
+      fail(source_, node, name, "expected true or false, got '" + node.Scalar() + "'");
+    }
   }
 
   template <size_t N>
@@ -158,6 +167,7 @@ class FieldWriter {
     out_ << std::string(text, end);
   }
   void write(int value) { out_ << value; }
+  void write(bool value) { out_ << value; }
   void write(const std::string& value) { out_ << value; }
   template <size_t N>
   void write(const std::array<double, N>& values) {

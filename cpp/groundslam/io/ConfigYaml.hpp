@@ -18,6 +18,8 @@ class ConfigLoader {
   void applyText(const std::string& yaml_text, const std::string& source);
   /// The configuration; throws InputError naming a required key that no layer set.
   Config finish() const;
+  /// The configuration without the required-key check (for tools that need no camera).
+  Config finishWithoutRequiredKeys() const { return config_; }
 
  private:
   Config config_;

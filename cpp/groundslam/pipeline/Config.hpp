@@ -11,7 +11,9 @@
 
 #include "groundslam/core/FeatureExtraction.hpp"
 #include "groundslam/core/Matching.hpp"
+#include "groundslam/core/PoseGraph.hpp"
 #include "groundslam/core/RigidFit.hpp"
+#include "groundslam/pipeline/LoopClosure.hpp"
 
 namespace groundslam {
 
@@ -36,6 +38,14 @@ struct FallbackSettings {
   double sigma_rad = 0.05;   ///< standard deviation added to the heading, radians
 };
 
+/// How measurements become graph edges and when the graph is optimised.
+struct GraphConfig {
+  double min_sigma_m = 0.0005;     ///< floor on an edge's position standard deviation (unmodelled errors: a rocking mount)
+  double min_sigma_rad = 0.0005;   ///< floor on an edge's heading standard deviation
+  int optimise_every_frames = 10;  ///< after a loop closure, optimise at most this often (and once at the end)
+  PoseGraphSettings solver;
+};
+
 struct Config {
   CameraConfig camera;
   DatasetConfig dataset;
@@ -43,6 +53,8 @@ struct Config {
   MatcherSettings matching;
   FitSettings odometry;
   FallbackSettings fallback;
+  LoopClosureSettings loop_closure;
+  GraphConfig graph;
 };
 
 /// Allowed values of a numeric field.
@@ -54,7 +66,7 @@ struct Range {
 constexpr Range kPositive{0.0, std::numeric_limits<double>::infinity(), true};
 constexpr Range kNonNegative{0.0, std::numeric_limits<double>::infinity(), false};
 
-/// Allowed values of a string field.
+/// Allowed values of a string field; empty: any string.
 using Choices = std::vector<std::string>;
 
 /// Keys that a configuration must set (conventions.md): "section.key".
@@ -92,6 +104,23 @@ void visitConfigFields(Config_& c, Visitor&& v) {
   v("odometry", "seed", c.odometry.seed, kNonNegative);
   v("odometry", "fallback_sigma_m", c.fallback.sigma_m, kPositive);
   v("odometry", "fallback_sigma_rad", c.fallback.sigma_rad, kPositive);
+  v("loop_closure", "enabled", c.loop_closure.enabled, Range{});
+  v("loop_closure", "vocabulary", c.loop_closure.vocabulary, Choices{});
+  v("loop_closure", "database_delay_frames", c.loop_closure.database_delay_frames, Range{1, 1e9});
+  v("loop_closure", "max_candidates", c.loop_closure.max_candidates, Range{1, 1000});
+  v("loop_closure", "min_bow_score", c.loop_closure.min_bow_score, Range{0.0, 1.0});
+  v("loop_closure", "min_matches", c.loop_closure.min_matches, Range{3, 1e9});
+  v("loop_closure", "max_covariance_score", c.loop_closure.max_covariance_score, Range{-30.0, 30.0});
+  v("loop_closure", "max_ambiguity", c.loop_closure.max_ambiguity, Range{0.0, 1.0});
+  v("loop_closure", "max_disagreement_m", c.loop_closure.max_disagreement_m, kPositive);
+  v("loop_closure", "max_disagreement_per_m", c.loop_closure.max_disagreement_per_m, kNonNegative);
+  v("loop_closure", "max_disagreement_rad", c.loop_closure.max_disagreement_rad, kPositive);
+  v("loop_closure", "max_disagreement_rad_per_m", c.loop_closure.max_disagreement_rad_per_m, kNonNegative);
+  v("graph", "min_sigma_m", c.graph.min_sigma_m, kNonNegative);
+  v("graph", "min_sigma_rad", c.graph.min_sigma_rad, kNonNegative);
+  v("graph", "optimise_every_frames", c.graph.optimise_every_frames, Range{1, 1e9});
+  v("graph", "loop_loss_scale", c.graph.solver.loop_loss_scale, kPositive);
+  v("graph", "max_iterations", c.graph.solver.max_iterations, Range{1, 10000});
 }
 
 }  // namespace groundslam

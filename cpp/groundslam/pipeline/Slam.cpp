@@ -50,36 +50,83 @@ CameraModel cameraModelFrom(const CameraConfig& c) {
   return CameraModel(k, T_robot_camera);
 }
 
-Slam::Slam(const Config& config)
+Slam::Slam(const Config& config, std::shared_ptr<const Vocabulary> vocabulary)
     : config_(config),
       camera_(cameraModelFrom(config.camera)),
       extractor_(config.features),
-      matcher_(config.matching) {}
+      matcher_(config.matching),
+      graph_(config.graph.solver) {
+  if (config.loop_closure.enabled && vocabulary && !vocabulary->empty()) {
+    loop_closer_.emplace(config.loop_closure, std::move(vocabulary), config.matching, config.odometry);
+  }
+}
 
 FrameResult Slam::process(const cv::Mat& image, double timestamp) {
   StageTimer total;
   FrameResult result;
-  result.index = static_cast<int>(poses_.size());
+  result.index = static_cast<int>(timestamps_.size());
   result.timestamp = timestamp;
+  timestamps_.push_back(timestamp);
 
   // §III-A: ORB keypoints and descriptors, projected to metric points on the ground plane (eqs. 2-4).
   Keyframe current = extractKeyframe(image, timestamp, result);
 
-  // §III-B: match to the previous image and fit T_prev_curr with a robust M-estimator (eqs. 5-6).
-  Pose2 T_world_robot;
+  // §III-B: match to the previous image, fit T_prev_curr with a robust M-estimator (eqs. 5-6), add the edge.
   if (previous_) {
     const OdometryEdge odometry = estimateOdometry(*previous_, current, result);
     if (!odometry.fallback) last_good_odometry_ = odometry;
-    T_world_robot = poses_.back().T_world_robot * odometry.T_prev_curr;
+    addToGraph(odometry);
     result.status = odometry.fallback ? std::string("fallback_") + fitStatusName(odometry.fit_status) : "ok";
   } else {
+    graph_.addPose(Pose2());
     result.status = "first";
   }
-  poses_.push_back({timestamp, T_world_robot});
-  result.T_world_robot = T_world_robot;
+
+  // §III-C: loop closures through the three gates become graph edges; the graph is optimised (LM).
+  closeLoops(current, result);
+  optimiseIfDue(result, false);
+
+  result.T_world_robot = graph_.poses().back();
   previous_ = std::move(current);
   result.times.total_ms = total.lap();
   return result;
+}
+
+void Slam::finish() {
+  FrameResult ignored;
+  optimiseIfDue(ignored, true);
+}
+
+void Slam::addToGraph(const OdometryEdge& odometry) {
+  const int from = static_cast<int>(graph_.poses().size()) - 1;
+  const int to = graph_.addPose(graph_.poses().back() * odometry.T_prev_curr);
+  graph_.addEdge({from, to, odometry.T_prev_curr,
+                  informationFrom(odometry.covariance, config_.graph.min_sigma_m, config_.graph.min_sigma_rad), false});
+}
+
+void Slam::closeLoops(const Keyframe& current, FrameResult& result) {
+  if (!loop_closer_) return;
+  StageTimer timer;
+  for (const LoopCandidate& candidate : loop_closer_->process(current.index, current.features, graph_.poses())) {
+    candidates_.push_back(candidate);
+    if (!candidate.accepted()) continue;
+    graph_.addEdge({candidate.frame_a, candidate.frame_b, candidate.T_a_b,
+                    informationFrom(candidate.covariance, config_.graph.min_sigma_m, config_.graph.min_sigma_rad), true});
+    ++result.loop_closures;
+    ++unoptimised_loops_;
+  }
+  result.times.loop_ms = timer.lap();
+}
+
+void Slam::optimiseIfDue(FrameResult& result, bool force) {
+  const int frame = static_cast<int>(graph_.poses().size()) - 1;
+  if (unoptimised_loops_ == 0) return;
+  if (!force && frame - last_optimised_frame_ < config_.graph.optimise_every_frames) return;
+  StageTimer timer;
+  graph_.optimise();  // warm start: the current estimates are the initial values
+  unoptimised_loops_ = 0;
+  last_optimised_frame_ = frame;
+  result.times.optimise_ms = timer.lap();
 }
 
 Keyframe Slam::extractKeyframe(const cv::Mat& image, double timestamp, FrameResult& result) const {
@@ -121,6 +168,10 @@ OdometryEdge Slam::fallbackOdometry(OdometryEdge failed) const {
   return failed;
 }
 
-Trajectory Slam::trajectory() const { return poses_; }
+Trajectory Slam::trajectory() const {
+  Trajectory trajectory;
+  for (size_t i = 0; i < graph_.poses().size(); ++i) trajectory.push_back({timestamps_[i], graph_.poses()[i]});
+  return trajectory;
+}
 
 }  // namespace groundslam

@@ -2,19 +2,23 @@
 // The SLAM system of Hart et al. (ICRA 2023), one image at a time: image processing (§III-A), local
 // odometry (§III-B), loop closure (§III-C) and pose-graph optimisation.
 
+#include <memory>
 #include <optional>
 #include <vector>
 
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
 
+#include "groundslam/bow/Vocabulary.hpp"
 #include "groundslam/core/CameraModel.hpp"
 #include "groundslam/core/FeatureExtraction.hpp"
 #include "groundslam/core/Matching.hpp"
+#include "groundslam/core/PoseGraph.hpp"
 #include "groundslam/core/RigidFit.hpp"
 #include "groundslam/core/Trajectory.hpp"
 #include "groundslam/pipeline/Config.hpp"
 #include "groundslam/pipeline/FrameResult.hpp"
+#include "groundslam/pipeline/LoopClosure.hpp"
 
 namespace groundslam {
 
@@ -40,26 +44,40 @@ struct OdometryEdge {
 
 class Slam {
  public:
-  explicit Slam(const Config& config);
+  /// `vocabulary` may be null when loop closure is disabled in the configuration.
+  Slam(const Config& config, std::shared_ptr<const Vocabulary> vocabulary);
 
   /// Processes the next image (8-bit grey) of the sequence.
   FrameResult process(const cv::Mat& image, double timestamp);
+  /// Optimises the graph once more if loop closures arrived since the last optimisation.
+  void finish();
 
   /// The current estimate of every processed frame's pose.
   Trajectory trajectory() const;
+  const PoseGraph& graph() const { return graph_; }
+  /// Every loop-closure candidate verified so far, accepted or not.
+  const std::vector<LoopCandidate>& loopCandidates() const { return candidates_; }
 
  private:
   Keyframe extractKeyframe(const cv::Mat& image, double timestamp, FrameResult& result) const;
   OdometryEdge estimateOdometry(const Keyframe& previous, const Keyframe& current, FrameResult& result) const;
   OdometryEdge fallbackOdometry(OdometryEdge failed) const;
+  void addToGraph(const OdometryEdge& odometry);
+  void closeLoops(const Keyframe& current, FrameResult& result);
+  void optimiseIfDue(FrameResult& result, bool force);
 
   Config config_;
   CameraModel camera_;
   OrbExtractor extractor_;
   DescriptorMatcher matcher_;
+  std::optional<LoopCloser> loop_closer_;
+  PoseGraph graph_;
   std::optional<Keyframe> previous_;
   std::optional<OdometryEdge> last_good_odometry_;
-  Trajectory poses_;
+  std::vector<double> timestamps_;
+  std::vector<LoopCandidate> candidates_;
+  int unoptimised_loops_ = 0;
+  int last_optimised_frame_ = -1000000;
 };
 
 }  // namespace groundslam

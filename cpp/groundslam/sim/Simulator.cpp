@@ -105,14 +105,14 @@ cv::Mat SequenceSimulator::renderFrame(int index) const {
   const Eigen::Isometry3d mount = mountAt(index);
   cv::Mat radiance;
   if (settings_.motion_blur > 0.0 && index > 0) {
-    // Average renders over the exposure, which ends at this frame's pose (the shutter closes at the timestamp).
+    // Average renders over the exposure, centred on this frame's pose: cameras stamp mid-exposure.
     const Pose2 motion = between(poses_[static_cast<size_t>(index) - 1], pose);
     const double blur_px = settings_.motion_blur * motion.translation().norm() / camera_.groundSampleDistance();
     const int samples = std::clamp(static_cast<int>(std::ceil(blur_px)) + 1, 2, 12);
     radiance = cv::Mat::zeros(settings_.camera.height, settings_.camera.width, CV_32F);
     for (int k = 0; k < samples; ++k) {
-      const double back = settings_.motion_blur * k / (samples - 1);
-      const Pose2 sub = pose * Pose2(-back * motion.x, -back * motion.y, -back * motion.theta);
+      const double u = settings_.motion_blur * (static_cast<double>(k) / (samples - 1) - 0.5);
+      const Pose2 sub = pose * Pose2(u * motion.x, u * motion.y, u * motion.theta);
       radiance += renderer_.render(texture, sub, mount);
     }
     radiance /= samples;

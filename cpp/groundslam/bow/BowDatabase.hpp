@@ -1,0 +1,31 @@
+#pragma once
+// The image database of paper §III-C1: bag-of-words vectors of earlier frames in an inverted index,
+// queried for the frames most similar to the current one.
+
+#include <unordered_map>
+#include <utility>
+#include <vector>
+
+#include "groundslam/bow/Vocabulary.hpp"
+
+namespace groundslam {
+
+struct BowMatch {
+  int frame = 0;       ///< the frame id given to add()
+  double score = 0.0;  ///< bowScore in [0, 1]
+};
+
+class BowDatabase {
+ public:
+  void add(int frame, const BowVector& bow);
+  /// The best `max_results` frames by score, best first. Cost grows with the postings of the
+  /// query's words, not with the frames that share none of them.
+  std::vector<BowMatch> query(const BowVector& bow, int max_results) const;
+  int size() const { return frames_; }
+
+ private:
+  std::unordered_map<int, std::vector<std::pair<int, double>>> inverted_;  ///< word -> (frame, weight)
+  int frames_ = 0;
+};
+
+}  // namespace groundslam

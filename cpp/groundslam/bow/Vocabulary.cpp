@@ -1,0 +1,202 @@
+#include "groundslam/bow/Vocabulary.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <random>
+#include <stdexcept>
+
+namespace groundslam {
+namespace {
+
+Descriptor rowOf(const cv::Mat& descriptors, int row) {
+  Descriptor d;
+  std::memcpy(d.data(), descriptors.ptr<std::uint8_t>(row), d.size());
+  return d;
+}
+
+/// Bitwise majority of a cluster: the point minimising the summed Hamming distance (the k-median).
+Descriptor bitwiseMedian(const std::vector<const Descriptor*>& members) {
+  std::array<int, 256> ones{};
+  for (const Descriptor* d : members) {
+    for (size_t bit = 0; bit < 256; ++bit) ones[bit] += ((*d)[bit / 8] >> (bit % 8)) & 1;
+  }
+  Descriptor median{};
+  for (size_t bit = 0; bit < 256; ++bit) {
+    if (2 * static_cast<size_t>(ones[bit]) > members.size()) median[bit / 8] = static_cast<std::uint8_t>(median[bit / 8] | (1u << (bit % 8)));
+  }
+  return median;
+}
+
+size_t nearestCentre(const Descriptor& d, const std::vector<Descriptor>& centres) {
+  size_t best = 0;
+  int best_distance = std::numeric_limits<int>::max();
+  for (size_t c = 0; c < centres.size(); ++c) {
+    const int distance = hammingDistance(d.data(), centres[c].data());
+    if (distance < best_distance) best_distance = distance, best = c;
+  }
+  return best;
+}
+
+/// k-means++ seeding: each next centre drawn with probability proportional to squared distance.
+std::vector<Descriptor> seedCentres(const std::vector<const Descriptor*>& points, int k, std::mt19937_64& rng) {
+  std::vector<Descriptor> centres{*points[std::uniform_int_distribution<size_t>(0, points.size() - 1)(rng)]};
+  std::vector<double> weight(points.size());
+  while (static_cast<int>(centres.size()) < k) {
+    for (size_t i = 0; i < points.size(); ++i) {
+      const double d = hammingDistance(points[i]->data(), centres[nearestCentre(*points[i], centres)].data());
+      weight[i] = d * d;
+    }
+    if (*std::max_element(weight.begin(), weight.end()) == 0.0) break;  // fewer distinct points than k
+    centres.push_back(*points[std::discrete_distribution<size_t>(weight.begin(), weight.end())(rng)]);
+  }
+  return centres;
+}
+
+/// Splits points into up to k clusters by k-medians.
+std::vector<std::vector<const Descriptor*>> cluster(const std::vector<const Descriptor*>& points, int k, int iterations,
+                                                    std::mt19937_64& rng) {
+  std::vector<Descriptor> centres = seedCentres(points, k, rng);
+  std::vector<std::vector<const Descriptor*>> groups;
+  for (int it = 0; it < iterations; ++it) {
+    groups.assign(centres.size(), {});
+    for (const Descriptor* p : points) groups[nearestCentre(*p, centres)].push_back(p);
+    bool changed = false;
+    for (size_t c = 0; c < centres.size(); ++c) {
+      if (groups[c].empty()) continue;
+      const Descriptor median = bitwiseMedian(groups[c]);
+      changed = changed || median != centres[c];
+      centres[c] = median;
+    }
+    if (!changed) break;
+  }
+  groups.erase(std::remove_if(groups.begin(), groups.end(), [](const auto& g) { return g.empty(); }), groups.end());
+  return groups;
+}
+
+}  // namespace
+
+int hammingDistance(const std::uint8_t* a, const std::uint8_t* b) {
+  int distance = 0;
+  for (size_t i = 0; i < 32; i += 8) {
+    std::uint64_t x, y;
+    std::memcpy(&x, a + i, 8);
+    std::memcpy(&y, b + i, 8);
+    distance += __builtin_popcountll(x ^ y);
+  }
+  return distance;
+}
+
+Vocabulary::Vocabulary(int branching, int depth, std::vector<Node> nodes, std::vector<double> idf)
+    : branching_(branching), depth_(depth), nodes_(std::move(nodes)), idf_(std::move(idf)) {
+  for (const Node& n : nodes_) {
+    const bool leaf = n.child_count == 0;
+    if (leaf && (n.word < 0 || n.word >= static_cast<int>(idf_.size()))) throw std::invalid_argument("leaf without a valid word");
+    if (!leaf && (n.first_child <= 0 || n.first_child + n.child_count > static_cast<int>(nodes_.size()))) {
+      throw std::invalid_argument("child index out of range");
+    }
+  }
+}
+
+Vocabulary Vocabulary::train(const std::vector<cv::Mat>& descriptors_per_image, const VocabularySettings& settings) {
+  std::vector<Descriptor> all;
+  for (const cv::Mat& image : descriptors_per_image) {
+    for (int r = 0; r < image.rows; ++r) all.push_back(rowOf(image, r));
+  }
+  Vocabulary vocabulary;
+  vocabulary.branching_ = settings.branching;
+  vocabulary.depth_ = settings.depth;
+  if (all.empty()) return vocabulary;
+  std::mt19937_64 rng(settings.seed);
+  // Breadth-first construction: children of a node are stored consecutively.
+  struct Pending {
+    int node;
+    int level;
+    std::vector<const Descriptor*> points;
+  };
+  std::vector<const Descriptor*> everything;
+  for (const Descriptor& d : all) everything.push_back(&d);
+  vocabulary.nodes_.push_back(Node{bitwiseMedian(everything), -1, 0, -1});
+  std::vector<Pending> queue{{0, 0, everything}};
+  for (size_t q = 0; q < queue.size(); ++q) {
+    Pending current = std::move(queue[q]);
+    if (current.level >= settings.depth || static_cast<int>(current.points.size()) <= 1) {
+      vocabulary.nodes_[static_cast<size_t>(current.node)].word = static_cast<int>(vocabulary.idf_.size());
+      vocabulary.idf_.push_back(0.0);
+      continue;
+    }
+    auto groups = cluster(current.points, settings.branching, settings.iterations, rng);
+    Node& parent = vocabulary.nodes_[static_cast<size_t>(current.node)];
+    parent.first_child = static_cast<int>(vocabulary.nodes_.size());
+    parent.child_count = static_cast<int>(groups.size());
+    for (auto& group : groups) {
+      const int index = static_cast<int>(vocabulary.nodes_.size());
+      vocabulary.nodes_.push_back(Node{bitwiseMedian(group), -1, 0, -1});
+      queue.push_back({index, current.level + 1, std::move(group)});
+    }
+  }
+  // IDF: log(N / n_i), n_i = training images in which word i occurs.
+  std::vector<int> images_with_word(vocabulary.idf_.size(), 0);
+  for (const cv::Mat& image : descriptors_per_image) {
+    std::vector<bool> seen(vocabulary.idf_.size(), false);
+    for (int r = 0; r < image.rows; ++r) seen[static_cast<size_t>(vocabulary.wordOf(image.ptr<std::uint8_t>(r)))] = true;
+    for (size_t w = 0; w < seen.size(); ++w) images_with_word[w] += seen[w] ? 1 : 0;
+  }
+  const double n_images = static_cast<double>(descriptors_per_image.size());
+  for (size_t w = 0; w < vocabulary.idf_.size(); ++w) {
+    vocabulary.idf_[w] = std::log(n_images / std::max(1, images_with_word[w]));
+  }
+  return vocabulary;
+}
+
+int Vocabulary::wordOf(const std::uint8_t* descriptor) const {
+  size_t node = 0;
+  while (nodes_[node].child_count > 0) {
+    const Node& parent = nodes_[node];
+    size_t best = static_cast<size_t>(parent.first_child);
+    int best_distance = std::numeric_limits<int>::max();
+    for (int c = 0; c < parent.child_count; ++c) {
+      const size_t child = static_cast<size_t>(parent.first_child + c);
+      const int distance = hammingDistance(descriptor, nodes_[child].centre.data());
+      if (distance < best_distance) best_distance = distance, best = child;
+    }
+    node = best;
+  }
+  return nodes_[node].word;
+}
+
+BowVector Vocabulary::transform(const cv::Mat& descriptors) const {
+  BowVector bow;
+  if (nodes_.empty()) return bow;
+  for (int r = 0; r < descriptors.rows; ++r) {
+    const int word = wordOf(descriptors.ptr<std::uint8_t>(r));
+    bow[word] += idf_[static_cast<size_t>(word)];  // term frequency times IDF
+  }
+  double total = 0.0;
+  for (const auto& [word, weight] : bow) total += weight;
+  if (total > 0.0) {
+    for (auto& [word, weight] : bow) weight /= total;
+  }
+  return bow;
+}
+
+double bowScore(const BowVector& a, const BowVector& b) {
+  // For L1-normalised vectors: |a - b|_1 = 2 + sum over shared words of (|a_i - b_i| - |a_i| - |b_i|).
+  double shared = 0.0;
+  auto i = a.begin();
+  auto j = b.begin();
+  while (i != a.end() && j != b.end()) {
+    if (i->first < j->first) {
+      ++i;
+    } else if (j->first < i->first) {
+      ++j;
+    } else {
+      shared += std::abs(i->second - j->second) - std::abs(i->second) - std::abs(j->second);
+      ++i, ++j;
+    }
+  }
+  return std::clamp(-0.5 * shared, 0.0, 1.0);
+}
+
+}  // namespace groundslam

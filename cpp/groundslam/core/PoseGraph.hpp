@@ -1,0 +1,57 @@
+#pragma once
+// An SE(2) pose graph solved with Ceres by Levenberg-Marquardt (paper §III-C). Each edge carries the
+// information (inverse covariance) of the fit that measured it; loop edges get a robust loss so that
+// one wrong loop closure cannot bend the map.
+
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "groundslam/core/Pose2.hpp"
+
+namespace groundslam {
+
+struct GraphEdge {
+  int from = 0;
+  int to = 0;
+  Pose2 T_from_to;                  ///< measured pose of `to` in the frame of `from`
+  Eigen::Matrix3d information = Eigen::Matrix3d::Identity();  ///< inverse covariance of (x, y, theta)
+  bool loop = false;                ///< loop closure (robust loss) or odometry
+};
+
+struct PoseGraphSettings {
+  double loop_loss_scale = 1.0;  ///< Cauchy scale on a loop edge's whitened residual (in standard deviations)
+  int max_iterations = 50;       ///< Levenberg-Marquardt iterations per optimisation
+};
+
+struct OptimisationSummary {
+  bool converged = false;
+  int iterations = 0;
+  double initial_cost = 0.0;
+  double final_cost = 0.0;
+};
+
+class PoseGraph {
+ public:
+  explicit PoseGraph(const PoseGraphSettings& settings = {});
+
+  /// Adds a pose with its initial estimate; returns its index. Pose 0 is held fixed (it defines the map frame).
+  int addPose(const Pose2& initial_T_world_robot);
+  void addEdge(const GraphEdge& edge);
+  /// Optimises all poses, starting from the current estimates.
+  OptimisationSummary optimise();
+
+  const std::vector<Pose2>& poses() const { return poses_; }
+  const std::vector<GraphEdge>& edges() const { return edges_; }
+  void setPose(int index, const Pose2& T_world_robot) { poses_[static_cast<size_t>(index)] = T_world_robot; }
+
+ private:
+  PoseGraphSettings settings_;
+  std::vector<Pose2> poses_;
+  std::vector<GraphEdge> edges_;
+};
+
+/// Information matrix from a covariance, with a floor on the standard deviations (unmodelled errors).
+Eigen::Matrix3d informationFrom(const Eigen::Matrix3d& covariance, double min_sigma_m, double min_sigma_rad);
+
+}  // namespace groundslam

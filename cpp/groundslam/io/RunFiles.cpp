@@ -1,0 +1,108 @@
+#include "groundslam/io/RunFiles.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <sstream>
+
+#include "groundslam/io/Files.hpp"
+#include "groundslam/io/InputError.hpp"
+#include "groundslam/io/TextParsing.hpp"
+
+namespace groundslam {
+
+std::string formatLoopClosuresCsv(const std::vector<LoopCandidate>& candidates) {
+  std::string csv = "frame_a,frame_b,x,y,theta,bow_score,matches,covariance_score\n";
+  char row[256];
+  for (const auto& c : candidates) {
+    if (!c.accepted()) continue;
+    std::snprintf(row, sizeof(row), "%d,%d,%.9f,%.9f,%.9f,%.6f,%d,%.4f\n", c.frame_a, c.frame_b, c.T_a_b.x, c.T_a_b.y,
+                  c.T_a_b.theta, c.bow_score, c.matches, c.covariance_score);
+    csv += row;
+  }
+  return csv;
+}
+
+std::string formatCandidatesCsv(const std::vector<LoopCandidate>& candidates,
+                                const std::vector<std::optional<CandidateTruth>>& truths) {
+  const bool with_truth = !truths.empty();
+  std::string csv = "frame_a,frame_b,bow_score,matches,inliers,covariance_score,rejected_by,accepted,x,y,theta,ambiguity";
+  csv += with_truth ? ",true_distance_m,footprints_overlap,translation_error_m,rotation_error_deg\n" : "\n";
+  char row[512];
+  for (size_t i = 0; i < candidates.size(); ++i) {
+    const LoopCandidate& c = candidates[i];
+    std::snprintf(row, sizeof(row), "%d,%d,%.6f,%d,%d,%.4f,%s,%d,%.9f,%.9f,%.9f,%.4f", c.frame_a, c.frame_b, c.bow_score,
+                  c.matches, c.inliers, c.covariance_score, c.accepted() ? "none" : loopGateName(c.rejected_by),
+                  c.accepted() ? 1 : 0, c.T_a_b.x, c.T_a_b.y, c.T_a_b.theta, c.ambiguity);
+    csv += row;
+    if (with_truth) {
+      if (truths[i]) {
+        std::snprintf(row, sizeof(row), ",%.6f,%d,%.9f,%.6f", truths[i]->distance_m, truths[i]->footprints_overlap ? 1 : 0,
+                      truths[i]->translation_error_m, truths[i]->rotation_error_deg);
+        csv += row;
+      } else {
+        csv += ",,,,";
+      }
+    }
+    csv += "\n";
+  }
+  return csv;
+}
+
+std::vector<LoopCandidate> readCandidatesCsv(const std::string& path) {
+  std::istringstream in(readTextFile(path));
+  std::string line;
+  if (!std::getline(in, line) || line.rfind("frame_a,frame_b,bow_score", 0) != 0) {
+    throw InputError(path + ":1: not a candidates.csv header");
+  }
+  std::vector<LoopCandidate> candidates;
+  for (int number = 2; std::getline(in, line); ++number) {
+    if (trim(line).empty()) continue;
+    std::vector<std::string> cells;
+    std::stringstream row(line);
+    for (std::string cell; std::getline(row, cell, ',');) cells.push_back(cell);
+    if (cells.size() < 12) throw InputError(path + ":" + std::to_string(number) + ": expected at least 12 columns");
+    try {
+      LoopCandidate c;
+      c.frame_a = std::stoi(cells[0]);
+      c.frame_b = std::stoi(cells[1]);
+      c.bow_score = std::stod(cells[2]);
+      c.matches = std::stoi(cells[3]);
+      c.inliers = std::stoi(cells[4]);
+      c.covariance_score = std::stod(cells[5]);
+      static const std::map<std::string, LoopGate> gates = {{"none", LoopGate::none}, {"bow_score", LoopGate::bow_score},
+                                                             {"matches", LoopGate::matches}, {"covariance", LoopGate::covariance},
+                                                             {"ambiguous", LoopGate::ambiguous},
+                                                             {"inconsistent", LoopGate::inconsistent}};
+      const auto gate = gates.find(cells[6]);
+      if (gate == gates.end()) throw InputError(path + ":" + std::to_string(number) + ": unknown gate '" + cells[6] + "'");
+      c.rejected_by = gate->second;
+      c.T_a_b = Pose2(std::stod(cells[8]), std::stod(cells[9]), std::stod(cells[10]));
+      c.ambiguity = std::stod(cells[11]);
+      candidates.push_back(c);
+    } catch (const std::logic_error&) {
+      throw InputError(path + ":" + std::to_string(number) + ": not a number in the row");
+    }
+  }
+  return candidates;
+}
+
+std::string formatG2o(const PoseGraph& graph) {
+  std::string text;
+  char line[512];
+  for (size_t i = 0; i < graph.poses().size(); ++i) {
+    const Pose2& p = graph.poses()[i];
+    std::snprintf(line, sizeof(line), "VERTEX_SE2 %zu %.9f %.9f %.9f\n", i, p.x, p.y, p.theta);
+    text += line;
+  }
+  text += "FIX 0\n";
+  for (const GraphEdge& e : graph.edges()) {
+    const Eigen::Matrix3d& I = e.information;
+    std::snprintf(line, sizeof(line), "EDGE_SE2 %d %d %.9f %.9f %.9f %.9g %.9g %.9g %.9g %.9g %.9g\n", e.from, e.to,
+                  e.T_from_to.x, e.T_from_to.y, e.T_from_to.theta, I(0, 0), I(0, 1), I(0, 2), I(1, 1), I(1, 2), I(2, 2));
+    text += line;
+  }
+  return text;
+}
+
+}  // namespace groundslam

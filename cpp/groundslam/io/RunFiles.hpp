@@ -1,0 +1,28 @@
+#pragma once
+// The loop-closure and graph files of a run folder.
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "groundslam/core/PoseGraph.hpp"
+#include "groundslam/eval/LoopClosureMetrics.hpp"
+#include "groundslam/pipeline/LoopClosure.hpp"
+
+namespace groundslam {
+
+/// `loop_closures.csv`: frame_a,frame_b,x,y,theta,bow_score,matches,covariance_score (accepted only);
+/// (x, y, theta) is T_a_b, the pose of frame b's robot in frame a's robot frame.
+std::string formatLoopClosuresCsv(const std::vector<LoopCandidate>& candidates);
+
+/// `candidates.csv`: every verified candidate with its three scores and the gate that rejected it;
+/// with ground truth also true_distance_m, footprints_overlap and the transform errors.
+std::string formatCandidatesCsv(const std::vector<LoopCandidate>& candidates,
+                                const std::vector<std::optional<CandidateTruth>>& truths);
+/// Reads the candidates back (scores, gate, transform). Throws InputError naming file and line.
+std::vector<LoopCandidate> readCandidatesCsv(const std::string& path);
+
+/// `graph.g2o`: VERTEX_SE2 id x y theta, EDGE_SE2 a b dx dy dtheta I11 I12 I13 I22 I23 I33.
+std::string formatG2o(const PoseGraph& graph);
+
+}  // namespace groundslam

@@ -1,0 +1,108 @@
+#include "groundslam/pipeline/LoopClosure.hpp"
+
+#include <cmath>
+#include <limits>
+
+namespace groundslam {
+
+const char* loopGateName(LoopGate gate) {
+  switch (gate) {
+    case LoopGate::none: return "";
+    case LoopGate::bow_score: return "bow_score";
+    case LoopGate::matches: return "matches";
+    case LoopGate::covariance: return "covariance";
+    case LoopGate::ambiguous: return "ambiguous";
+    case LoopGate::inconsistent: return "inconsistent";
+  }
+  return "unknown";
+}
+
+LoopCloser::LoopCloser(const LoopClosureSettings& settings, std::shared_ptr<const Vocabulary> vocabulary,
+                       const MatcherSettings& matching, const FitSettings& fitting)
+    : settings_(settings), vocabulary_(std::move(vocabulary)), matcher_(matching), fitting_(fitting) {
+  fitting_.measure_ambiguity = true;
+}
+
+std::vector<LoopCandidate> LoopCloser::process(int frame, const GroundFeatures& features, const std::vector<Pose2>& estimates) {
+  features_.push_back(features);
+  bow_.push_back(vocabulary_->transform(features.descriptors));
+  const double step = frame > 0 ? (estimates[static_cast<size_t>(frame)].translation() -
+                                   estimates[static_cast<size_t>(frame) - 1].translation()).norm()
+                                : 0.0;
+  path_length_m_.push_back((path_length_m_.empty() ? 0.0 : path_length_m_.back()) + step);
+  std::vector<LoopCandidate> candidates;
+  for (const BowMatch& match : database_.query(bow_.back(), settings_.max_candidates)) {
+    LoopCandidate candidate = verify(match.frame, features_[static_cast<size_t>(match.frame)], frame, features, match.score);
+    if (candidate.accepted() && !consistentWithEstimate(candidate, estimates)) candidate.rejected_by = LoopGate::inconsistent;
+    if (candidate.accepted()) last_loop_a_ = candidate.frame_a, last_loop_b_ = candidate.frame_b;
+    candidates.push_back(candidate);
+  }
+  // The paper's delay: frame n-k enters the database only now, so neighbours never close loops.
+  const int entering = frame - settings_.database_delay_frames;
+  if (entering >= 0) {
+    database_.add(entering, bow_[static_cast<size_t>(entering)]);
+    bow_[static_cast<size_t>(entering)].clear();  // kept in the database's index
+  }
+  return candidates;
+}
+
+double LoopCloser::driftPathLength(int frame_a, int frame_b) const {
+  const auto s = [this](int frame) { return path_length_m_[static_cast<size_t>(frame)]; };
+  double length = s(frame_b) - s(frame_a);
+  if (last_loop_b_ >= 0) {
+    // Through the last loop closure: a -> last a, the closed loop (no drift), last b -> b.
+    length = std::min(length, std::abs(s(frame_a) - s(last_loop_a_)) + std::abs(s(frame_b) - s(last_loop_b_)));
+  }
+  return length;
+}
+
+bool LoopCloser::consistentWithEstimate(const LoopCandidate& candidate, const std::vector<Pose2>& estimates) const {
+  // Not in the paper: a loop transform far from what the map already believes is a lookalike place
+  // (e.g. a tile offset), unless drift since the last correction could explain the difference.
+  const Pose2 estimated = between(estimates[static_cast<size_t>(candidate.frame_a)], estimates[static_cast<size_t>(candidate.frame_b)]);
+  const Pose2 difference = estimated.inverse() * candidate.T_a_b;
+  const double d = driftPathLength(candidate.frame_a, candidate.frame_b);
+  return difference.translation().norm() <= settings_.max_disagreement_m + settings_.max_disagreement_per_m * d &&
+         std::abs(difference.theta) <= settings_.max_disagreement_rad + settings_.max_disagreement_rad_per_m * d;
+}
+
+LoopCandidate LoopCloser::verify(int frame_a, const GroundFeatures& a, int frame_b, const GroundFeatures& b,
+                                 double bow_score) const {
+  LoopCandidate candidate;
+  candidate.frame_a = frame_a;
+  candidate.frame_b = frame_b;
+  candidate.bow_score = bow_score;
+  // Gate 1: bag-of-words similarity.
+  if (bow_score < settings_.min_bow_score) {
+    candidate.rejected_by = LoopGate::bow_score;
+    return candidate;
+  }
+  // Gate 2: keypoint matches (paper §III-B1 matching).
+  const std::vector<Match> matches = matcher_.match(b.descriptors, a.descriptors);
+  candidate.matches = static_cast<int>(matches.size());
+  if (candidate.matches < settings_.min_matches) {
+    candidate.rejected_by = LoopGate::matches;
+    return candidate;
+  }
+  // Gate 3: the robust fit and its covariance score; a failed fit has unbounded covariance.
+  std::vector<Eigen::Vector2d> points_a, points_b;
+  for (const Match& m : matches) {
+    points_a.push_back(a.points[static_cast<size_t>(m.train)]);
+    points_b.push_back(b.points[static_cast<size_t>(m.query)]);
+  }
+  const RigidEstimate fit = fitRigidTransform(points_a, points_b, fitting_);
+  candidate.inliers = fit.inliers;
+  candidate.covariance_score = fit.ok() ? fit.covarianceScore() : std::numeric_limits<double>::infinity();
+  candidate.T_a_b = fit.T_target_source;
+  candidate.covariance = fit.covariance;
+  candidate.ambiguity = fit.ambiguity();
+  if (candidate.covariance_score > settings_.max_covariance_score) {
+    candidate.rejected_by = LoopGate::covariance;
+  } else if (candidate.ambiguity > settings_.max_ambiguity) {
+    // Not in the paper: on a repetitive floor a transform shifted by one tile fits almost as well.
+    candidate.rejected_by = LoopGate::ambiguous;
+  }
+  return candidate;
+}
+
+}  // namespace groundslam

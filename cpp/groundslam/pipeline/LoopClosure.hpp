@@ -1,0 +1,85 @@
+#pragma once
+// Paper §III-C: loop closure. Frame n-k enters the bag-of-words database when frame n arrives; frame n
+// queries it, and the best few candidates by BoW score must pass three gates, cheapest first:
+// BoW score, number of matched keypoints, and the covariance score of the robust fit.
+
+#include <memory>
+#include <string>
+#include <cmath>
+#include <vector>
+
+#include "groundslam/core/Pose2.hpp"
+
+#include <Eigen/Core>
+
+#include "groundslam/bow/BowDatabase.hpp"
+#include "groundslam/bow/Vocabulary.hpp"
+#include "groundslam/core/FeatureExtraction.hpp"
+#include "groundslam/core/Matching.hpp"
+#include "groundslam/core/RigidFit.hpp"
+
+namespace groundslam {
+
+struct LoopClosureSettings {
+  bool enabled = true;               ///< false: odometry only
+  std::string vocabulary;            ///< vocabulary file; empty: the default shipped with groundslam
+  int database_delay_frames = 20;    ///< k: frame n-k enters the database when frame n arrives
+  int max_candidates = 4;            ///< candidates verified per frame, best BoW scores first
+  double min_bow_score = 0.04;       ///< gate 1
+  int min_matches = 30;              ///< gate 2: ratio-test matches between the two frames
+  double max_covariance_score = -4.0;  ///< gate 3: log10 of the largest eigenvalue of the fit's covariance
+  double max_ambiguity = 0.8;        ///< also gate 3: rival transform's support / the fit's (repetitive floors)
+  /// A loop transform may disagree with the current estimate of T_a_b by at most base + rate * d, where d
+  /// is the path length over which drift could have built up between a and b (through the last loop closure).
+  double max_disagreement_m = 0.015;
+  double max_disagreement_per_m = 0.01;
+  double max_disagreement_rad = 0.035;
+  double max_disagreement_rad_per_m = 0.02;
+};
+
+/// Which gate a candidate failed ("" when accepted).
+enum class LoopGate { none, bow_score, matches, covariance, ambiguous, inconsistent };
+const char* loopGateName(LoopGate gate);
+
+/// One verified candidate: frame_a (earlier) against frame_b (current).
+struct LoopCandidate {
+  int frame_a = 0;
+  int frame_b = 0;
+  double bow_score = 0.0;
+  int matches = -1;                    ///< -1 when gate 1 already rejected it
+  double covariance_score = std::nan("");  ///< NaN when not fitted, +inf when the fit failed
+  int inliers = 0;
+  double ambiguity = std::nan("");     ///< rival transform's support / the fit's; NaN when not fitted
+  LoopGate rejected_by = LoopGate::none;
+  Pose2 T_a_b;                         ///< pose of b's robot in a's robot frame (when fitted)
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Identity();
+  bool accepted() const { return rejected_by == LoopGate::none; }
+};
+
+class LoopCloser {
+ public:
+  LoopCloser(const LoopClosureSettings& settings, std::shared_ptr<const Vocabulary> vocabulary,
+             const MatcherSettings& matching, const FitSettings& fitting);
+
+  /// Verifies frame `frame`'s candidates against the database, then lets frame - k into it. `estimates`
+  /// holds the current pose estimate of every frame up to this one. Returns every candidate verified.
+  std::vector<LoopCandidate> process(int frame, const GroundFeatures& features, const std::vector<Pose2>& estimates);
+
+ private:
+  LoopCandidate verify(int frame_a, const GroundFeatures& a, int frame_b, const GroundFeatures& b, double bow_score) const;
+  /// The path length over which the estimate of T_a_b could have drifted.
+  double driftPathLength(int frame_a, int frame_b) const;
+  bool consistentWithEstimate(const LoopCandidate& candidate, const std::vector<Pose2>& estimates) const;
+
+  LoopClosureSettings settings_;
+  std::shared_ptr<const Vocabulary> vocabulary_;
+  DescriptorMatcher matcher_;
+  FitSettings fitting_;
+  BowDatabase database_;
+  std::vector<GroundFeatures> features_;  ///< of every frame, by index
+  std::vector<BowVector> bow_;            ///< of every frame not yet in the database
+  std::vector<double> path_length_m_;     ///< estimated distance driven up to each frame
+  int last_loop_a_ = -1, last_loop_b_ = -1;  ///< the latest accepted loop closure
+};
+
+}  // namespace groundslam
