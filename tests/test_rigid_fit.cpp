@@ -92,3 +92,36 @@ TEST(RigidFit, DegenerateInputsFailAsData) {
   // Mismatched lengths are refused, not read out of bounds.
   EXPECT_FALSE(fitRigidTransform(line.target, noise.source, settings).ok());
 }
+
+TEST(RigidFit, RepetitivePatternIsAmbiguousUntilAPriorPicksTheRepetition) {
+  // A floor of identical 4 cm tiles: each point also matches its copies one tile away, so the matches
+  // support the true motion and the tile-shifted ones about equally.
+  const Pose2 truth(0.003, 0.001, 0.02);
+  std::mt19937 rng(8);
+  std::uniform_real_distribution<double> u(0.0, 0.04);
+  std::normal_distribution<double> noise(0.0, 0.0001);
+  std::vector<Eigen::Vector2d> target, source;
+  for (int i = 0; i < 60; ++i) {
+    const Eigen::Vector2d in_tile(u(rng), u(rng));
+    for (int tile = 0; tile < 3; ++tile) {
+      const Eigen::Vector2d p = in_tile + Eigen::Vector2d(0.04 * tile, 0.0);
+      const int matched_tile = (tile + i) % 3;  // the matcher cannot tell the copies apart
+      source.push_back(p);
+      target.push_back(truth * (in_tile + Eigen::Vector2d(0.04 * matched_tile, 0.0)) + Eigen::Vector2d(noise(rng), noise(rng)));
+    }
+  }
+  FitSettings settings;
+  settings.measure_ambiguity = true;
+  const RigidEstimate blind = fitRigidTransform(target, source, settings);
+  ASSERT_TRUE(blind.ok());
+  EXPECT_GT(blind.ambiguity(), 0.5);  // a shifted transform is nearly as good (unique texture: near 0)
+  // A prior within 1.5 cm of the truth leaves one repetition: the right one, unambiguously.
+  const TransformPrior prior{Pose2(0.01, -0.005, 0.03), 0.015, 0.05};
+  const RigidEstimate guided = fitRigidTransform(target, source, settings, prior);
+  ASSERT_TRUE(guided.ok());
+  EXPECT_LT((guided.T_target_source.translation() - truth.translation()).norm(), 0.0002);
+  EXPECT_LT(guided.ambiguity(), 0.2);
+  // A prior that excludes the truth finds no consistent transform.
+  const TransformPrior wrong{Pose2(0.2, 0.2, 1.0), 0.015, 0.05};
+  EXPECT_FALSE(fitRigidTransform(target, source, settings, wrong).ok());
+}

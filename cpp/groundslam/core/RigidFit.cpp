@@ -91,8 +91,14 @@ bool farApart(const Pose2& a, const Pose2& b) {
 
 /// 2-point RANSAC: the hypothesis with the most inliers. Stops early once the inlier ratio makes a
 /// better one unlikely (99.9% confidence), unless every hypothesis is wanted to measure ambiguity.
+bool withinPrior(const Pose2& T, const std::optional<TransformPrior>& prior) {
+  if (!prior) return true;
+  const Pose2 difference = prior->T_target_source.inverse() * T;
+  return difference.translation().norm() <= prior->radius_m && std::abs(difference.theta) <= prior->radius_rad;
+}
+
 RansacResult ransac(const std::vector<Eigen::Vector2d>& target, const std::vector<Eigen::Vector2d>& source,
-                    const FitSettings& settings) {
+                    const FitSettings& settings, const std::optional<TransformPrior>& prior) {
   std::mt19937 rng(static_cast<std::mt19937::result_type>(settings.seed));
   std::uniform_int_distribution<size_t> pick(0, target.size() - 1);
   const double thr = settings.ransac_inlier_m;
@@ -107,6 +113,7 @@ RansacResult ransac(const std::vector<Eigen::Vector2d>& target, const std::vecto
     const double theta = std::atan2(ds.x() * dt.y() - ds.y() * dt.x(), ds.dot(dt));
     const Eigen::Vector2d t = 0.5 * (target[i] + target[j]) - Eigen::Rotation2Dd(theta) * (0.5 * (source[i] + source[j]));
     const Pose2 T(t.x(), t.y(), theta);
+    if (!withinPrior(T, prior)) continue;
     std::vector<int> inliers = inliersOf(T, target, source, thr);
     if (settings.measure_ambiguity) tried.push_back({T, static_cast<int>(inliers.size())});
     if (inliers.size() <= result.inliers.size()) continue;
@@ -157,12 +164,12 @@ double RigidEstimate::covarianceScore() const {
 }
 
 RigidEstimate fitRigidTransform(const std::vector<Eigen::Vector2d>& target, const std::vector<Eigen::Vector2d>& source,
-                                const FitSettings& settings) {
+                                const FitSettings& settings, const std::optional<TransformPrior>& prior) {
   RigidEstimate estimate;
   const size_t min_inliers = static_cast<size_t>(std::max(3, settings.min_inliers));
   if (target.size() != source.size() || target.size() < min_inliers) return estimate;  // too_few_matches
 
-  const RansacResult consensus = ransac(target, source, settings);
+  const RansacResult consensus = ransac(target, source, settings, prior);
   std::vector<int> inliers = consensus.inliers;
   estimate.inliers = static_cast<int>(inliers.size());
   estimate.rival_inliers = consensus.rival_support;

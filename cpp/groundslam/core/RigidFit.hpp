@@ -4,6 +4,7 @@
 // The paper starts the solver at identity, which fails for large rotations; we start it from a
 // 2-point RANSAC estimate, so any heading works (revisits at 180 degrees included).
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -21,6 +22,14 @@ struct FitSettings {
   int ransac_iterations = 200;   ///< most RANSAC hypotheses (fewer when the inlier ratio allows)
   int seed = 42;                 ///< seed of the RANSAC sampler
   bool measure_ambiguity = false;  ///< run every RANSAC hypothesis and report the best rival transform's support
+};
+
+/// What is already believed about the transform: RANSAC then only considers hypotheses within the window.
+/// On a repetitive floor this picks the right repetition out of several that the matches support equally.
+struct TransformPrior {
+  Pose2 T_target_source;
+  double radius_m = 0.0;    ///< largest translation difference considered
+  double radius_rad = 0.0;  ///< largest rotation difference considered
 };
 
 enum class FitStatus { ok, too_few_matches, too_few_inliers, degenerate, solver_failed };
@@ -44,6 +53,6 @@ struct RigidEstimate {
 
 /// Fits T with target[i] ~ T * source[i] for matched pairs. Failure is a status, never an exception.
 RigidEstimate fitRigidTransform(const std::vector<Eigen::Vector2d>& target, const std::vector<Eigen::Vector2d>& source,
-                                const FitSettings& settings);
+                                const FitSettings& settings, const std::optional<TransformPrior>& prior = std::nullopt);
 
 }  // namespace groundslam

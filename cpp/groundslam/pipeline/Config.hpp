@@ -107,9 +107,12 @@ void visitConfigFields(Config_& c, Visitor&& v) {
   v("loop_closure", "enabled", c.loop_closure.enabled, Range{});
   v("loop_closure", "vocabulary", c.loop_closure.vocabulary, Choices{});
   v("loop_closure", "database_delay_frames", c.loop_closure.database_delay_frames, Range{1, 1e9});
-  v("loop_closure", "max_candidates", c.loop_closure.max_candidates, Range{1, 1000});
+  v("loop_closure", "max_candidates", c.loop_closure.max_candidates, Range{0, 1000});
+  v("loop_closure", "max_global_candidates", c.loop_closure.max_global_candidates, Range{0, 1000});
+  v("loop_closure", "search_radius_m", c.loop_closure.search_radius_m, kNonNegative);
   v("loop_closure", "min_bow_score", c.loop_closure.min_bow_score, Range{0.0, 1.0});
   v("loop_closure", "min_matches", c.loop_closure.min_matches, Range{3, 1e9});
+  v("loop_closure", "min_inliers", c.loop_closure.min_inliers, Range{3, 1e9});
   v("loop_closure", "max_covariance_score", c.loop_closure.max_covariance_score, Range{-30.0, 30.0});
   v("loop_closure", "max_ambiguity", c.loop_closure.max_ambiguity, Range{0.0, 1.0});
   v("loop_closure", "max_disagreement_m", c.loop_closure.max_disagreement_m, kPositive);

@@ -1,5 +1,6 @@
 #include "groundslam/pipeline/LoopClosure.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -21,6 +22,7 @@ LoopCloser::LoopCloser(const LoopClosureSettings& settings, std::shared_ptr<cons
                        const MatcherSettings& matching, const FitSettings& fitting)
     : settings_(settings), vocabulary_(std::move(vocabulary)), matcher_(matching), fitting_(fitting) {
   fitting_.measure_ambiguity = true;
+  fitting_.min_inliers = settings.min_inliers;
 }
 
 std::vector<LoopCandidate> LoopCloser::process(int frame, const GroundFeatures& features, const std::vector<Pose2>& estimates) {
@@ -31,19 +33,41 @@ std::vector<LoopCandidate> LoopCloser::process(int frame, const GroundFeatures& 
                                 : 0.0;
   path_length_m_.push_back((path_length_m_.empty() ? 0.0 : path_length_m_.back()) + step);
   std::vector<LoopCandidate> candidates;
-  for (const BowMatch& match : database_.query(bow_.back(), settings_.max_candidates)) {
-    LoopCandidate candidate = verify(match.frame, features_[static_cast<size_t>(match.frame)], frame, features, match.score);
-    if (candidate.accepted() && !consistentWithEstimate(candidate, estimates)) candidate.rejected_by = LoopGate::inconsistent;
+  for (const BowMatch& match : selectCandidates(frame, estimates)) {
+    LoopCandidate candidate = verify(match.frame, features_[static_cast<size_t>(match.frame)], frame, features, match.score,
+                                     priorOf(match.frame, frame, estimates));
     if (candidate.accepted()) last_loop_a_ = candidate.frame_a, last_loop_b_ = candidate.frame_b;
     candidates.push_back(candidate);
   }
   // The paper's delay: frame n-k enters the database only now, so neighbours never close loops.
   const int entering = frame - settings_.database_delay_frames;
-  if (entering >= 0) {
-    database_.add(entering, bow_[static_cast<size_t>(entering)]);
-    bow_[static_cast<size_t>(entering)].clear();  // kept in the database's index
-  }
+  if (entering >= 0) database_.add(entering, bow_[static_cast<size_t>(entering)]);
   return candidates;
+}
+
+std::vector<BowMatch> LoopCloser::selectCandidates(int frame, const std::vector<Pose2>& estimates) const {
+  // Frames whose footprint may overlap this one's, given the drift since the last correction, ranked by
+  // BoW score; then the best of the whole database (the paper's global search), in case drift is larger.
+  const BowVector& bow = bow_[static_cast<size_t>(frame)];
+  const Eigen::Vector2d here = estimates[static_cast<size_t>(frame)].translation();
+  std::vector<BowMatch> nearby;
+  const int last_in_database = frame - settings_.database_delay_frames;
+  for (int a = 0; a <= last_in_database; ++a) {
+    const double reach = settings_.search_radius_m + settings_.max_disagreement_m +
+                         settings_.max_disagreement_per_m * driftPathLength(a, frame);
+    if ((estimates[static_cast<size_t>(a)].translation() - here).norm() <= reach) {
+      nearby.push_back({a, bowScore(bow, bow_[static_cast<size_t>(a)])});
+    }
+  }
+  const auto better = [](const BowMatch& x, const BowMatch& y) { return x.score > y.score || (x.score == y.score && x.frame < y.frame); };
+  std::sort(nearby.begin(), nearby.end(), better);
+  if (static_cast<int>(nearby.size()) > settings_.max_candidates) nearby.resize(static_cast<size_t>(settings_.max_candidates));
+  for (const BowMatch& global : database_.query(bow, settings_.max_candidates + settings_.max_global_candidates)) {
+    if (static_cast<int>(nearby.size()) >= settings_.max_candidates + settings_.max_global_candidates) break;
+    const bool chosen = std::any_of(nearby.begin(), nearby.end(), [&](const BowMatch& m) { return m.frame == global.frame; });
+    if (!chosen) nearby.push_back(global);
+  }
+  return nearby;
 }
 
 double LoopCloser::driftPathLength(int frame_a, int frame_b) const {
@@ -56,18 +80,17 @@ double LoopCloser::driftPathLength(int frame_a, int frame_b) const {
   return length;
 }
 
-bool LoopCloser::consistentWithEstimate(const LoopCandidate& candidate, const std::vector<Pose2>& estimates) const {
+TransformPrior LoopCloser::priorOf(int frame_a, int frame_b, const std::vector<Pose2>& estimates) const {
   // Not in the paper: a loop transform far from what the map already believes is a lookalike place
   // (e.g. a tile offset), unless drift since the last correction could explain the difference.
-  const Pose2 estimated = between(estimates[static_cast<size_t>(candidate.frame_a)], estimates[static_cast<size_t>(candidate.frame_b)]);
-  const Pose2 difference = estimated.inverse() * candidate.T_a_b;
-  const double d = driftPathLength(candidate.frame_a, candidate.frame_b);
-  return difference.translation().norm() <= settings_.max_disagreement_m + settings_.max_disagreement_per_m * d &&
-         std::abs(difference.theta) <= settings_.max_disagreement_rad + settings_.max_disagreement_rad_per_m * d;
+  const double d = driftPathLength(frame_a, frame_b);
+  return {between(estimates[static_cast<size_t>(frame_a)], estimates[static_cast<size_t>(frame_b)]),
+          settings_.max_disagreement_m + settings_.max_disagreement_per_m * d,
+          settings_.max_disagreement_rad + settings_.max_disagreement_rad_per_m * d};
 }
 
 LoopCandidate LoopCloser::verify(int frame_a, const GroundFeatures& a, int frame_b, const GroundFeatures& b,
-                                 double bow_score) const {
+                                 double bow_score, const TransformPrior& prior) const {
   LoopCandidate candidate;
   candidate.frame_a = frame_a;
   candidate.frame_b = frame_b;
@@ -90,7 +113,13 @@ LoopCandidate LoopCloser::verify(int frame_a, const GroundFeatures& a, int frame
     points_a.push_back(a.points[static_cast<size_t>(m.train)]);
     points_b.push_back(b.points[static_cast<size_t>(m.query)]);
   }
-  const RigidEstimate fit = fitRigidTransform(points_a, points_b, fitting_);
+  // Gate 3 fits only transforms the map can still believe (see priorOf); none there is an inconsistent candidate.
+  const RigidEstimate fit = fitRigidTransform(points_a, points_b, fitting_, prior);
+  if (fit.status == FitStatus::too_few_inliers && fitRigidTransform(points_a, points_b, fitting_).ok()) {
+    candidate.rejected_by = LoopGate::inconsistent;
+    candidate.covariance_score = std::numeric_limits<double>::infinity();
+    return candidate;
+  }
   candidate.inliers = fit.inliers;
   candidate.covariance_score = fit.ok() ? fit.covarianceScore() : std::numeric_limits<double>::infinity();
   candidate.T_a_b = fit.T_target_source;

@@ -24,9 +24,12 @@ struct LoopClosureSettings {
   bool enabled = true;               ///< false: odometry only
   std::string vocabulary;            ///< vocabulary file; empty: the default shipped with groundslam
   int database_delay_frames = 20;    ///< k: frame n-k enters the database when frame n arrives
-  int max_candidates = 4;            ///< candidates verified per frame, best BoW scores first
+  int max_candidates = 4;            ///< candidates near the estimate verified per frame, best BoW scores first
+  int max_global_candidates = 1;     ///< further candidates from the whole database (the paper's search)
+  double search_radius_m = 0.25;     ///< frames this close to the estimate (plus the drift allowance) are near
   double min_bow_score = 0.04;       ///< gate 1
   int min_matches = 30;              ///< gate 2: ratio-test matches between the two frames
+  int min_inliers = 25;              ///< gate 3: a loop fit with fewer inliers has failed (unbounded covariance)
   double max_covariance_score = -4.0;  ///< gate 3: log10 of the largest eigenvalue of the fit's covariance
   double max_ambiguity = 0.8;        ///< also gate 3: rival transform's support / the fit's (repetitive floors)
   /// A loop transform may disagree with the current estimate of T_a_b by at most base + rate * d, where d
@@ -66,10 +69,13 @@ class LoopCloser {
   std::vector<LoopCandidate> process(int frame, const GroundFeatures& features, const std::vector<Pose2>& estimates);
 
  private:
-  LoopCandidate verify(int frame_a, const GroundFeatures& a, int frame_b, const GroundFeatures& b, double bow_score) const;
+  std::vector<BowMatch> selectCandidates(int frame, const std::vector<Pose2>& estimates) const;
+  LoopCandidate verify(int frame_a, const GroundFeatures& a, int frame_b, const GroundFeatures& b, double bow_score,
+                       const TransformPrior& prior) const;
+  /// The estimated T_a_b and how far drift since the last correction may have moved it.
+  TransformPrior priorOf(int frame_a, int frame_b, const std::vector<Pose2>& estimates) const;
   /// The path length over which the estimate of T_a_b could have drifted.
   double driftPathLength(int frame_a, int frame_b) const;
-  bool consistentWithEstimate(const LoopCandidate& candidate, const std::vector<Pose2>& estimates) const;
 
   LoopClosureSettings settings_;
   std::shared_ptr<const Vocabulary> vocabulary_;
@@ -77,7 +83,7 @@ class LoopCloser {
   FitSettings fitting_;
   BowDatabase database_;
   std::vector<GroundFeatures> features_;  ///< of every frame, by index
-  std::vector<BowVector> bow_;            ///< of every frame not yet in the database
+  std::vector<BowVector> bow_;            ///< of every frame
   std::vector<double> path_length_m_;     ///< estimated distance driven up to each frame
   int last_loop_a_ = -1, last_loop_b_ = -1;  ///< the latest accepted loop closure
 };
