@@ -27,6 +27,7 @@ struct RunOptions {
   std::string config;
   std::string out_dir = "runs/latest";
   bool no_loop_closure = false;
+  bool report = false;
 };
 
 Config loadRunConfig(const Dataset& dataset, const RunOptions& o) {
@@ -107,7 +108,19 @@ void addRunCommand(CLI::App& app) {
   cmd->add_option("--config", o->config, "Configuration YAML, applied over camera.yaml beside the dataset");
   cmd->add_option("--out", o->out_dir, "Run folder for the results")->capture_default_str();
   cmd->add_flag("--no-loop-closure", o->no_loop_closure, "Odometry only (sets loop_closure.enabled = false)");
-  cmd->callback([o]() { run(*o); });
+  cmd->add_flag("--report", o->report, "Also run odometry only into DIR/odometry and write DIR/report.html");
+  cmd->callback([o]() {
+    run(*o);
+    if (!o->report) return;
+    if (!o->no_loop_closure) {
+      RunOptions odometry = *o;
+      odometry.no_loop_closure = true;
+      odometry.out_dir = (fs::path(o->out_dir) / "odometry").string();
+      std::cout << "odometry-only run for the report:\n";
+      run(odometry);
+    }
+    writeReport(o->out_dir, "");
+  });
 }
 
 }  // namespace groundslam::apps

@@ -15,6 +15,7 @@ int main(int argc, char** argv) {
   groundslam::apps::addRunCommand(app);
   groundslam::apps::addEvaluateCommand(app);
   groundslam::apps::addVocabularyCommand(app);
+  groundslam::apps::addReportCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -10,7 +10,7 @@ echo "== simulating a 400-frame asphalt loop driven twice (mount jitter, blur, n
   --jitter-deg 0.5 --motion-blur 0.3 --defocus-px 0.6 --noise 2 --exposure-variation 0.15 --vignetting 0.2 --seed 7
 
 echo "== running groundslam =="
-"$bin" run "$data/sequence.txt" --out "$run"
+"$bin" run "$data/sequence.txt" --out "$run" --report
 
 echo
 echo "results in $run/:"

@@ -8,6 +8,7 @@ packages=(
   libopencv-dev libceres-dev libeigen3-dev libyaml-cpp-dev libcli11-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   python3 python3-numpy python3-matplotlib
+  chromium fonts-dejavu-core
 )
 
 missing=()
