@@ -35,9 +35,9 @@ struct LoopClosureSettings {
   /// A loop transform may disagree with the current estimate of T_a_b by at most base + rate * d, where d
   /// is the path length over which drift could have built up between a and b (through the last loop closure).
   double max_disagreement_m = 0.015;
-  double max_disagreement_per_m = 0.01;
+  double max_disagreement_per_m = 0.005;
   double max_disagreement_rad = 0.035;
-  double max_disagreement_rad_per_m = 0.02;
+  double max_disagreement_rad_per_m = 0.01;
 };
 
 /// Which gate a candidate failed ("" when accepted).
