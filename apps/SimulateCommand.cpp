@@ -81,19 +81,6 @@ std::string describe(const sim::SimulationSettings& s, const SimulateOptions& o)
   return out.str();
 }
 
-Config cameraConfig(const sim::SimulationSettings& s) {
-  Config config;
-  config.camera.image_width = s.camera.width;
-  config.camera.image_height = s.camera.height;
-  config.camera.fx = s.camera.fx;
-  config.camera.fy = s.camera.fy;
-  config.camera.cx = s.camera.cx;
-  config.camera.cy = s.camera.cy;
-  config.camera.distortion = s.camera.distortion;
-  config.camera.mounting_height_m = s.mounting_height_m;
-  return config;
-}
-
 void simulate(SimulateOptions& o) {
   const sim::SimulationSettings settings = resolveSettings(o);
   cv::Mat user_texture;
@@ -104,7 +91,8 @@ void simulate(SimulateOptions& o) {
   const sim::SequenceSimulator simulator(settings, user_texture);
   fs::create_directories(fs::path(o.out_dir) / "images");
 
-  const Config config = cameraConfig(settings);
+  Config config;
+  config.camera = cameraConfigOf(settings.camera, settings.mounting_height_m);
   const double meters_per_pixel = settings.mounting_height_m / settings.camera.fx;
   std::vector<std::string> images;
   std::vector<Eigen::Matrix3d> homographies;

@@ -13,13 +13,7 @@ namespace {
 
 Config configFor(const sim::SimulationSettings& s) {
   Config c;
-  c.camera.image_width = s.camera.width;
-  c.camera.image_height = s.camera.height;
-  c.camera.fx = s.camera.fx;
-  c.camera.fy = s.camera.fy;
-  c.camera.cx = s.camera.cx;
-  c.camera.cy = s.camera.cy;
-  c.camera.mounting_height_m = s.mounting_height_m;
+  c.camera = cameraConfigOf(s.camera, s.mounting_height_m);
   return c;
 }
 

@@ -2,6 +2,19 @@
 
 namespace groundslam {
 
+CameraConfig cameraConfigOf(const CameraIntrinsics& k, double mounting_height_m) {
+  CameraConfig camera;
+  camera.image_width = k.width;
+  camera.image_height = k.height;
+  camera.fx = k.fx;
+  camera.fy = k.fy;
+  camera.cx = k.cx;
+  camera.cy = k.cy;
+  camera.distortion = k.distortion;
+  camera.mounting_height_m = mounting_height_m;
+  return camera;
+}
+
 const std::vector<std::string>& requiredConfigKeys() {
   static const std::vector<std::string> keys = {
       "camera.image_width", "camera.image_height", "camera.fx",         "camera.fy",

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "groundslam/core/CameraModel.hpp"
 #include "groundslam/core/FeatureExtraction.hpp"
 #include "groundslam/core/Matching.hpp"
 #include "groundslam/core/PoseGraph.hpp"
@@ -68,6 +69,9 @@ constexpr Range kNonNegative{0.0, std::numeric_limits<double>::infinity(), false
 
 /// Allowed values of a string field; empty: any string.
 using Choices = std::vector<std::string>;
+
+/// The camera section describing a camera with the default straight-down mount at `mounting_height_m`.
+CameraConfig cameraConfigOf(const CameraIntrinsics& intrinsics, double mounting_height_m);
 
 /// Keys that a configuration must set (conventions.md): "section.key".
 const std::vector<std::string>& requiredConfigKeys();
