@@ -4,6 +4,7 @@
 #include <sys/wait.h>
 
 #include <filesystem>
+#include <iostream>
 #include <memory>
 #include <vector>
 
@@ -32,6 +33,7 @@ void writeReport(const std::string& run_dir, const std::string& compare) {
   std::vector<char*> argv;
   for (auto& a : args) argv.push_back(a.data());
   argv.push_back(nullptr);
+  std::cout.flush();  // our lines first, then the script's
   pid_t pid = 0;
   if (posix_spawn(&pid, argv[0], nullptr, nullptr, argv.data(), environ) != 0) {
     throw InputError(std::string("cannot start ") + GROUNDSLAM_PYTHON);

@@ -15,3 +15,5 @@ echo "== running groundslam =="
 echo
 echo "results in $run/:"
 ls -1 "$run"
+echo
+echo "open $run/report.html in a browser for the figures (trajectory, loop closures, threshold scores, time, error)."
