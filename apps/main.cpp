@@ -16,6 +16,7 @@ int main(int argc, char** argv) {
   groundslam::apps::addEvaluateCommand(app);
   groundslam::apps::addVocabularyCommand(app);
   groundslam::apps::addReportCommand(app);
+  groundslam::apps::addFloorCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

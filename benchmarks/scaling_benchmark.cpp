@@ -1,0 +1,71 @@
+// Does the cost of a frame stay flat as the map grows? Renders a long random walk in memory (rendering is
+// not timed), runs the full pipeline, and prints the median frame time of the first and last 10% of frames
+// and the memory kept per frame. Usage: scaling_benchmark [FRAMES=5000] [WIDTHxHEIGHT=320x240]
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <string>
+#include <unistd.h>
+
+#include "groundslam/io/VocabularyFile.hpp"
+#include "groundslam/pipeline/Slam.hpp"
+#include "groundslam/sim/Simulator.hpp"
+
+using namespace groundslam;
+
+namespace {
+
+double residentMegabytes() {
+  std::ifstream statm("/proc/self/statm");
+  long pages = 0, resident = 0;
+  statm >> pages >> resident;
+  return static_cast<double>(resident) * static_cast<double>(sysconf(_SC_PAGESIZE)) / 1e6;
+}
+
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v.empty() ? 0.0 : v[v.size() / 2];
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const int frames = argc > 1 ? std::atoi(argv[1]) : 5000;
+  int width = 320, height = 240;
+  if (argc > 2) std::sscanf(argv[2], "%dx%d", &width, &height);
+  sim::SimulationSettings settings;
+  settings.camera = sim::scaledHdGroundIntrinsics(width, height);
+  settings.path.kind = sim::PathKind::random_walk;
+  settings.path.frames = frames;
+  settings.path.area_m = 1.5;  // a bounded area: the walk keeps revisiting, loops keep arriving
+  settings.mount_jitter_deg = 0.3;
+  const sim::SequenceSimulator simulator(settings);
+  Config config;
+  config.camera = cameraConfigOf(settings.camera, settings.mounting_height_m);
+  Slam slam(config, std::make_shared<const Vocabulary>(readVocabulary(GROUNDSLAM_DEFAULT_VOCABULARY)));
+
+  std::vector<double> ms;
+  const double rss_start = residentMegabytes();
+  double rss_after_first_tenth = rss_start;
+  int loops = 0;
+  for (int i = 0; i < frames; ++i) {
+    const cv::Mat image = simulator.renderFrame(i);
+    const auto start = std::chrono::steady_clock::now();
+    const FrameResult r = slam.process(image, i);
+    ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
+    loops += r.loop_closures;
+    if (i + 1 == frames / 10) rss_after_first_tenth = residentMegabytes();
+    if ((i + 1) % 500 == 0) std::fprintf(stderr, "%d frames, %.1f MB resident\n", i + 1, residentMegabytes());
+  }
+  const double rss_end = residentMegabytes();
+  const size_t tenth = static_cast<size_t>(frames / 10);
+  const double first = median(std::vector<double>(ms.begin(), ms.begin() + static_cast<long>(tenth)));
+  const double last = median(std::vector<double>(ms.end() - static_cast<long>(tenth), ms.end()));
+  std::printf("frames: %d at %dx%d, loop closures: %d\n", frames, width, height, loops);
+  std::printf("median frame time, first 10%%: %.2f ms, last 10%%: %.2f ms, ratio %.2f\n", first, last, last / first);
+  std::printf("resident memory: %.1f MB at start, %.1f MB at end; growth after the first 10%%: %.1f KB per frame\n",
+              rss_start, rss_end, (rss_end - rss_after_first_tenth) * 1000.0 / (frames - static_cast<int>(tenth)));
+  return 0;
+}
