@@ -86,3 +86,28 @@ TEST(Features, OrbPointsProjectToTheGround) {
   EXPECT_NEAR(ground.points.front().x(), (kp.x - 160.0) / 440.0 * 0.25, 1e-6);
   EXPECT_NEAR(ground.points.front().y(), -(kp.y - 120.0) / 440.0 * 0.25, 1e-6);
 }
+
+TEST(Matching, GuidedMatchingComparesOnlyNearbyFeatures) {
+  // Train features on a 1 cm grid; the query sees the same features moved by a known transform. Every
+  // descriptor also has an exact twin 5 cm away (a repeated pattern): brute force finds two equally good
+  // candidates and keeps nothing, guided matching looks only near the prediction and keeps the right one.
+  std::mt19937 rng(11);
+  const Pose2 T_train_query(0.004, -0.003, 0.05);
+  GroundFeatures train, query;
+  const cv::Mat unique = randomDescriptors(60, 21);
+  for (int i = 0; i < 60; ++i) {
+    const Eigen::Vector2d p(0.01 * (i % 6), 0.01 * (i / 6));
+    train.points.push_back(p);
+    train.descriptors.push_back(unique.row(i));
+    train.points.push_back(p + Eigen::Vector2d(0.05, 0.0));  // the twin, far away
+    train.descriptors.push_back(unique.row(i));
+    query.points.push_back(T_train_query.inverse() * p);
+    query.descriptors.push_back(flipBits(unique.row(i), 6, rng));
+  }
+  const auto guided = matchNearby(query, train, T_train_query, 0.004, 0.7);
+  ASSERT_EQ(guided.size(), 60u);
+  for (const auto& m : guided) EXPECT_EQ(m.train, 2 * m.query);
+  EXPECT_TRUE(DescriptorMatcher({0.7, "brute_force"}).match(query.descriptors, train.descriptors).empty());
+  // A prediction off by more than the radius finds nothing to compare with.
+  EXPECT_TRUE(matchNearby(query, train, Pose2(0.3, 0.3, 0.0) * T_train_query, 0.004, 0.7).empty());
+}

@@ -1,5 +1,10 @@
 #include "groundslam/core/Matching.hpp"
 
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <unordered_map>
+
 #include <opencv2/features2d.hpp>
 #include <opencv2/flann.hpp>
 
@@ -26,6 +31,80 @@ std::vector<Match> DescriptorMatcher::match(const cv::Mat& query, const cv::Mat&
     // Lowe's ratio test (paper eq. 5); f0 < f1 also rejects two equally good candidates at distance 0.
     if (f0 <= static_cast<float>(settings_.ratio) * f1 && f0 < f1) {
       matches.push_back({pair[0].queryIdx, pair[0].trainIdx, static_cast<int>(f0)});
+    }
+  }
+  return matches;
+}
+
+namespace {
+
+int hamming256(const std::uint8_t* a, const std::uint8_t* b) {
+  int distance = 0;
+  for (size_t i = 0; i < 32; i += 8) {
+    std::uint64_t x, y;
+    std::memcpy(&x, a + i, 8);
+    std::memcpy(&y, b + i, 8);
+    distance += __builtin_popcountll(x ^ y);
+  }
+  return distance;
+}
+
+/// Train features bucketed in square cells of the search radius: a query looks at its 3x3 cells.
+class PointGrid {
+ public:
+  PointGrid(const std::vector<Eigen::Vector2d>& points, double cell_m) : cell_m_(cell_m) {
+    for (size_t i = 0; i < points.size(); ++i) cells_[key(points[i])].push_back(static_cast<int>(i));
+  }
+  template <class Visit>
+  void forEachNear(const Eigen::Vector2d& p, Visit&& visit) const {
+    const auto [cx, cy] = cellOf(p);
+    for (long dx = -1; dx <= 1; ++dx) {
+      for (long dy = -1; dy <= 1; ++dy) {
+        const auto it = cells_.find(pack(cx + dx, cy + dy));
+        if (it == cells_.end()) continue;
+        for (int index : it->second) visit(index);
+      }
+    }
+  }
+
+ private:
+  std::pair<long, long> cellOf(const Eigen::Vector2d& p) const {
+    return {static_cast<long>(std::floor(p.x() / cell_m_)), static_cast<long>(std::floor(p.y() / cell_m_))};
+  }
+  static long long pack(long x, long y) { return (static_cast<long long>(x) << 32) ^ (static_cast<long long>(y) & 0xffffffffLL); }
+  long long key(const Eigen::Vector2d& p) const {
+    const auto [x, y] = cellOf(p);
+    return pack(x, y);
+  }
+  double cell_m_;
+  std::unordered_map<long long, std::vector<int>> cells_;
+};
+
+}  // namespace
+
+std::vector<Match> matchNearby(const GroundFeatures& query, const GroundFeatures& train, const Pose2& T_train_query,
+                               double radius_m, double ratio) {
+  std::vector<Match> matches;
+  if (query.size() == 0 || train.size() == 0) return matches;
+  const PointGrid grid(train.points, radius_m);
+  const double radius2 = radius_m * radius_m;
+  for (size_t q = 0; q < query.size(); ++q) {
+    const Eigen::Vector2d predicted = T_train_query * query.points[q];
+    const std::uint8_t* descriptor = query.descriptors.ptr<std::uint8_t>(static_cast<int>(q));
+    int best = -1, best_distance = 257, second_distance = 256;  // a lone candidate has no close rival
+    grid.forEachNear(predicted, [&](int t) {
+      if ((train.points[static_cast<size_t>(t)] - predicted).squaredNorm() > radius2) return;
+      const int d = hamming256(descriptor, train.descriptors.ptr<std::uint8_t>(t));
+      if (d < best_distance) {
+        second_distance = best_distance;
+        best_distance = d, best = t;
+      } else if (d < second_distance) {
+        second_distance = d;
+      }
+    });
+    second_distance = std::min(second_distance, 256);
+    if (best >= 0 && best_distance <= ratio * second_distance && best_distance < second_distance) {
+      matches.push_back({static_cast<int>(q), best, best_distance});
     }
   }
   return matches;

@@ -6,6 +6,9 @@
 
 #include <opencv2/core.hpp>
 
+#include "groundslam/core/FeatureExtraction.hpp"
+#include "groundslam/core/Pose2.hpp"
+
 namespace groundslam {
 
 struct MatcherSettings {
@@ -28,5 +31,12 @@ class DescriptorMatcher {
  private:
   MatcherSettings settings_;
 };
+
+/// Guided matching: each query feature is compared only with the train features lying within `radius_m`
+/// of where `T_train_query` predicts it, with the same ratio test among those. When the transform is
+/// roughly known (a loop candidate checked against the map's estimate) this costs a fraction of brute
+/// force and cannot pair a feature with a lookalike far away.
+std::vector<Match> matchNearby(const GroundFeatures& query, const GroundFeatures& train, const Pose2& T_train_query,
+                               double radius_m, double ratio);
 
 }  // namespace groundslam

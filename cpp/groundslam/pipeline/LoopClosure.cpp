@@ -5,6 +5,12 @@
 #include <limits>
 
 namespace groundslam {
+namespace {
+
+constexpr double kFootprintReachM = 0.15;  // a heading error moves features this far from the centre by angle * reach
+constexpr double kMatchSlackM = 0.005;     // keypoint noise and the rocking mount
+
+}  // namespace
 
 const char* loopGateName(LoopGate gate) {
   switch (gate) {
@@ -20,7 +26,7 @@ const char* loopGateName(LoopGate gate) {
 
 LoopCloser::LoopCloser(const LoopClosureSettings& settings, std::shared_ptr<const Vocabulary> vocabulary,
                        const MatcherSettings& matching, const FitSettings& fitting)
-    : settings_(settings), vocabulary_(std::move(vocabulary)), matcher_(matching), fitting_(fitting) {
+    : settings_(settings), vocabulary_(std::move(vocabulary)), matching_ratio_(matching.ratio), fitting_(fitting) {
   fitting_.measure_ambiguity = true;
   fitting_.min_inliers = settings.min_inliers;
 }
@@ -100,8 +106,10 @@ LoopCandidate LoopCloser::verify(int frame_a, const GroundFeatures& a, int frame
     candidate.rejected_by = LoopGate::bow_score;
     return candidate;
   }
-  // Gate 2: keypoint matches (paper §III-B1 matching).
-  const std::vector<Match> matches = matcher_.match(b.descriptors, a.descriptors);
+  // Gate 2: keypoint matches (paper §III-B1 matching), guided by the map's estimate of T_a_b: only features
+  // that the estimate, within its drift allowance, puts near each other are compared.
+  const double search_m = prior.radius_m + kFootprintReachM * prior.radius_rad + kMatchSlackM;
+  const std::vector<Match> matches = matchNearby(b, a, prior.T_target_source, search_m, matching_ratio_);
   candidate.matches = static_cast<int>(matches.size());
   if (candidate.matches < settings_.min_matches) {
     candidate.rejected_by = LoopGate::matches;
@@ -113,13 +121,8 @@ LoopCandidate LoopCloser::verify(int frame_a, const GroundFeatures& a, int frame
     points_a.push_back(a.points[static_cast<size_t>(m.train)]);
     points_b.push_back(b.points[static_cast<size_t>(m.query)]);
   }
-  // Gate 3 fits only transforms the map can still believe (see priorOf); none there is an inconsistent candidate.
+  // Gate 3: RANSAC considers only transforms the map can still believe (see priorOf).
   const RigidEstimate fit = fitRigidTransform(points_a, points_b, fitting_, prior);
-  if (fit.status == FitStatus::too_few_inliers && fitRigidTransform(points_a, points_b, fitting_).ok()) {
-    candidate.rejected_by = LoopGate::inconsistent;
-    candidate.covariance_score = std::numeric_limits<double>::infinity();
-    return candidate;
-  }
   candidate.inliers = fit.inliers;
   candidate.covariance_score = fit.ok() ? fit.covarianceScore() : std::numeric_limits<double>::infinity();
   candidate.T_a_b = fit.T_target_source;

@@ -79,7 +79,7 @@ class LoopCloser {
 
   LoopClosureSettings settings_;
   std::shared_ptr<const Vocabulary> vocabulary_;
-  DescriptorMatcher matcher_;
+  double matching_ratio_;
   FitSettings fitting_;
   BowDatabase database_;
   std::vector<GroundFeatures> features_;  ///< of every frame, by index
