@@ -1,6 +1,7 @@
 // `groundslam run DATASET`: runs SLAM on a sequence and writes the results into a run folder.
 #include <chrono>
 #include <filesystem>
+#include <future>
 #include <iostream>
 #include <memory>
 
@@ -45,15 +46,28 @@ std::shared_ptr<const Vocabulary> loadVocabulary(const Config& config) {
   return std::make_shared<const Vocabulary>(readVocabulary(path));
 }
 
-/// Runs every frame through the pipeline, with a progress line on a terminal.
+/// Runs every frame through the pipeline, with a progress line on a terminal. The next frame is decoded and
+/// its features extracted on a second thread while the current one goes through the back end.
 std::vector<FrameResult> processAll(const Dataset& dataset, const Config& config, Slam& slam, std::vector<double>& load_ms) {
+  struct Loaded {
+    double load_ms;
+    PreparedFrame frame;
+  };
+  auto prepare = [&](size_t i) {
+    const auto start = std::chrono::steady_clock::now();
+    const DatasetFrame& frame = dataset.frames[i];
+    const cv::Mat image = loadGrayImage(frame.image_path, config.camera.image_width, config.camera.image_height);
+    const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    return Loaded{ms, slam.prepareFrame(image, frame.timestamp)};
+  };
   std::vector<FrameResult> results;
   Progress progress("run", static_cast<int>(dataset.frames.size()));
-  for (const DatasetFrame& frame : dataset.frames) {
-    const auto start = std::chrono::steady_clock::now();
-    const cv::Mat image = loadGrayImage(frame.image_path, config.camera.image_width, config.camera.image_height);
-    load_ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
-    results.push_back(slam.process(image, frame.timestamp));
+  std::future<Loaded> next = std::async(std::launch::async, prepare, 0);
+  for (size_t i = 0; i < dataset.frames.size(); ++i) {
+    Loaded current = next.get();
+    if (i + 1 < dataset.frames.size()) next = std::async(std::launch::async, prepare, i + 1);
+    load_ms.push_back(current.load_ms);
+    results.push_back(slam.process(std::move(current.frame)));
     progress.update(static_cast<int>(results.size()));
   }
   slam.finish();

@@ -61,15 +61,30 @@ Slam::Slam(const Config& config, std::shared_ptr<const Vocabulary> vocabulary)
   }
 }
 
-FrameResult Slam::process(const cv::Mat& image, double timestamp) {
+FrameResult Slam::process(const cv::Mat& image, double timestamp) { return process(prepareFrame(image, timestamp)); }
+
+PreparedFrame Slam::prepareFrame(const cv::Mat& image, double timestamp) const {
+  // §III-A: ORB keypoints and descriptors, projected to metric points on the ground plane (eqs. 2-4).
+  StageTimer timer;
+  PreparedFrame prepared;
+  prepared.timestamp = timestamp;
+  const ImageFeatures image_features = extractor_.detect(image);
+  prepared.extract_ms = timer.lap();
+  prepared.features = dropNearTwins(projectToGround(image_features, camera_), config_.features.near_twin_max_distance);
+  prepared.project_ms = timer.lap();
+  return prepared;
+}
+
+FrameResult Slam::process(PreparedFrame prepared) {
   StageTimer total;
   FrameResult result;
   result.index = static_cast<int>(timestamps_.size());
-  result.timestamp = timestamp;
-  timestamps_.push_back(timestamp);
-
-  // §III-A: ORB keypoints and descriptors, projected to metric points on the ground plane (eqs. 2-4).
-  Keyframe current = extractKeyframe(image, timestamp, result);
+  result.timestamp = prepared.timestamp;
+  result.keypoints = static_cast<int>(prepared.features.size());
+  result.times.extract_ms = prepared.extract_ms;
+  result.times.project_ms = prepared.project_ms;
+  timestamps_.push_back(prepared.timestamp);
+  Keyframe current{result.index, prepared.timestamp, std::move(prepared.features)};
 
   // §III-B: match to the previous image, fit T_prev_curr with a robust M-estimator (eqs. 5-6), add the edge.
   if (previous_) {
@@ -88,7 +103,7 @@ FrameResult Slam::process(const cv::Mat& image, double timestamp) {
 
   result.T_world_robot = graph_.poses().back();
   previous_ = std::move(current);
-  result.times.total_ms = total.lap();
+  result.times.total_ms = prepared.extract_ms + prepared.project_ms + total.lap();
   return result;
 }
 
@@ -127,17 +142,6 @@ void Slam::optimiseIfDue(FrameResult& result, bool force) {
   unoptimised_loops_ = 0;
   last_optimised_frame_ = frame;
   result.times.optimise_ms = timer.lap();
-}
-
-Keyframe Slam::extractKeyframe(const cv::Mat& image, double timestamp, FrameResult& result) const {
-  StageTimer timer;
-  const ImageFeatures image_features = extractor_.detect(image);
-  result.times.extract_ms = timer.lap();
-  Keyframe keyframe{result.index, timestamp,
-                    dropNearTwins(projectToGround(image_features, camera_), config_.features.near_twin_max_distance)};
-  result.times.project_ms = timer.lap();
-  result.keypoints = static_cast<int>(keyframe.features.size());
-  return keyframe;
 }
 
 OdometryEdge Slam::estimateOdometry(const Keyframe& previous, const Keyframe& current, FrameResult& result) const {

@@ -32,6 +32,14 @@ struct Keyframe {
   GroundFeatures features;
 };
 
+/// An image after §III-A, ready for the rest of the pipeline.
+struct PreparedFrame {
+  double timestamp = 0.0;
+  GroundFeatures features;
+  double extract_ms = 0.0;
+  double project_ms = 0.0;
+};
+
 /// The relative motion between consecutive frames and how it was obtained.
 struct OdometryEdge {
   Pose2 T_prev_curr;
@@ -47,8 +55,13 @@ class Slam {
   /// `vocabulary` may be null when loop closure is disabled in the configuration.
   Slam(const Config& config, std::shared_ptr<const Vocabulary> vocabulary);
 
-  /// Processes the next image (8-bit grey) of the sequence.
+  /// Processes the next image (8-bit grey) of the sequence: prepareFrame, then process.
   FrameResult process(const cv::Mat& image, double timestamp);
+  /// Image processing alone (§III-A). It reads no state that process() changes, so an application may
+  /// prepare the next frame on another thread while process() runs (one prepareFrame at a time).
+  PreparedFrame prepareFrame(const cv::Mat& image, double timestamp) const;
+  /// Odometry, loop closure and optimisation (§III-B, §III-C) of a prepared frame.
+  FrameResult process(PreparedFrame frame);
   /// Optimises the graph once more if loop closures arrived since the last optimisation.
   void finish();
 
@@ -59,7 +72,6 @@ class Slam {
   const std::vector<LoopCandidate>& loopCandidates() const { return candidates_; }
 
  private:
-  Keyframe extractKeyframe(const cv::Mat& image, double timestamp, FrameResult& result) const;
   OdometryEdge estimateOdometry(const Keyframe& previous, const Keyframe& current, FrameResult& result) const;
   OdometryEdge fallbackOdometry(OdometryEdge failed) const;
   void addToGraph(const OdometryEdge& odometry);
