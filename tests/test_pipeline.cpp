@@ -73,3 +73,22 @@ TEST(Slam, TexturelessFrameFallsBackToThePreviousMotion) {
   const Pose2 truth = between(simulator.groundTruth()[0], simulator.groundTruth()[11]);
   EXPECT_LT((estimated.translation() - truth.translation()).norm(), 0.0005);
 }
+
+TEST(Slam, GuidedOdometryFollowsTheSameWalk) {
+  // Matching guided by the constant-velocity prediction, falling back to brute force when the motion
+  // changes too much: every frame still tracked, the error within the same bounds as brute force.
+  sim::SimulationSettings settings;
+  settings.path.kind = sim::PathKind::random_walk;
+  settings.path.frames = 80;
+  const sim::SequenceSimulator simulator(settings);
+  Config config = configFor(settings);
+  config.matching.guided_odometry_radius_m = 0.01;
+  Slam slam(config, nullptr);
+  for (int i = 0; i < simulator.frameCount(); ++i) {
+    const FrameResult r = slam.process(simulator.renderFrame(i), i);
+    EXPECT_EQ(r.status, i == 0 ? "first" : "ok") << i;
+  }
+  const TrajectoryMetrics m = evaluateTrajectory(truthOf(simulator), slam.trajectory()).metrics;
+  EXPECT_LT(m.translation_mae_cm_per_m, 0.1);
+  EXPECT_LT(m.rotation_mae_deg, 0.15);
+}

@@ -14,6 +14,8 @@ namespace groundslam {
 struct MatcherSettings {
   double ratio = 0.7;                  ///< lambda: keep a match when f0 <= lambda * f1
   std::string method = "brute_force";  ///< brute_force | lsh (FLANN multi-probe LSH)
+  double guided_odometry_radius_m = 0.0;  ///< > 0: odometry compares features within this of the constant-velocity prediction (faster, see docs/benchmarks.md); 0 = brute force
+  double guided_min_inlier_fraction = 0.25;  ///< fewer guided inliers (fraction of keypoints) falls back to brute force
 };
 
 struct Match {

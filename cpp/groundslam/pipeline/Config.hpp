@@ -100,6 +100,8 @@ void visitConfigFields(Config_& c, Visitor&& v) {
   v("features", "subpixel_window", c.features.subpixel_window, Range{0, 15});
   v("matching", "ratio", c.matching.ratio, Range{0.0, 1.0, true});
   v("matching", "method", c.matching.method, Choices{"brute_force", "lsh"});
+  v("matching", "guided_odometry_radius_m", c.matching.guided_odometry_radius_m, kNonNegative);
+  v("matching", "guided_min_inlier_fraction", c.matching.guided_min_inlier_fraction, Range{0.0, 1.0});
   v("odometry", "loss", c.odometry.loss, Choices{"huber", "cauchy", "geman_mcclure"});
   v("odometry", "loss_scale_m", c.odometry.loss_scale_m, kPositive);
   v("odometry", "min_inliers", c.odometry.min_inliers, Range{3, 100000});

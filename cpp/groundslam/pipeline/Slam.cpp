@@ -146,11 +146,25 @@ void Slam::optimiseIfDue(FrameResult& result, bool force) {
 
 OdometryEdge Slam::estimateOdometry(const Keyframe& previous, const Keyframe& current, FrameResult& result) const {
   StageTimer timer;
-  const std::vector<Match> matches = matcher_.match(current.features.descriptors, previous.features.descriptors);
-  result.times.match_ms = timer.lap();
-  const auto [previous_points, current_points] = matchedPoints(matches, current.features, previous.features);
-  const RigidEstimate fit = fitRigidTransform(previous_points, current_points, config_.odometry);
-  result.times.fit_ms = timer.lap();
+  RigidEstimate fit;
+  std::vector<Match> matches;
+  const double radius = config_.matching.guided_odometry_radius_m;
+  if (radius > 0.0 && last_good_odometry_) {
+    // Guided by constant velocity: compare only features the previous motion puts within `radius`.
+    matches = matchNearby(current.features, previous.features, last_good_odometry_->T_prev_curr, radius, config_.matching.ratio);
+    result.times.match_ms = timer.lap();
+    const auto [previous_points, current_points] = matchedPoints(matches, current.features, previous.features);
+    fit = fitRigidTransform(previous_points, current_points, config_.odometry);
+    result.times.fit_ms = timer.lap();
+  }
+  // Without a prediction, or when the robot changed its motion more than the radius allows: brute force.
+  if (!fit.ok() || fit.inliers < config_.matching.guided_min_inlier_fraction * static_cast<double>(current.features.size())) {
+    matches = matcher_.match(current.features.descriptors, previous.features.descriptors);
+    result.times.match_ms += timer.lap();
+    const auto [previous_points, current_points] = matchedPoints(matches, current.features, previous.features);
+    fit = fitRigidTransform(previous_points, current_points, config_.odometry);
+    result.times.fit_ms += timer.lap();
+  }
   result.matches = static_cast<int>(matches.size());
   result.inliers = fit.inliers;
 
