@@ -1,5 +1,7 @@
 #include "groundslam/bow/Vocabulary.hpp"
 
+#include "groundslam/core/Hamming.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -77,16 +79,7 @@ std::vector<std::vector<const Descriptor*>> cluster(const std::vector<const Desc
 
 }  // namespace
 
-int hammingDistance(const std::uint8_t* a, const std::uint8_t* b) {
-  int distance = 0;
-  for (size_t i = 0; i < 32; i += 8) {
-    std::uint64_t x, y;
-    std::memcpy(&x, a + i, 8);
-    std::memcpy(&y, b + i, 8);
-    distance += __builtin_popcountll(x ^ y);
-  }
-  return distance;
-}
+int hammingDistance(const std::uint8_t* a, const std::uint8_t* b) { return hammingDistance256(a, b); }
 
 Vocabulary::Vocabulary(int branching, int depth, std::vector<Node> nodes, std::vector<double> idf)
     : branching_(branching), depth_(depth), nodes_(std::move(nodes)), idf_(std::move(idf)) {

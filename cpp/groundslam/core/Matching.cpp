@@ -1,5 +1,7 @@
 #include "groundslam/core/Matching.hpp"
 
+#include "groundslam/core/Hamming.hpp"
+
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -37,17 +39,6 @@ std::vector<Match> DescriptorMatcher::match(const cv::Mat& query, const cv::Mat&
 }
 
 namespace {
-
-int hamming256(const std::uint8_t* a, const std::uint8_t* b) {
-  int distance = 0;
-  for (size_t i = 0; i < 32; i += 8) {
-    std::uint64_t x, y;
-    std::memcpy(&x, a + i, 8);
-    std::memcpy(&y, b + i, 8);
-    distance += __builtin_popcountll(x ^ y);
-  }
-  return distance;
-}
 
 /// Train features bucketed in square cells of the search radius: a query looks at its 3x3 cells.
 class PointGrid {
@@ -94,7 +85,7 @@ std::vector<Match> matchNearby(const GroundFeatures& query, const GroundFeatures
     int best = -1, best_distance = 257, second_distance = 256;  // a lone candidate has no close rival
     grid.forEachNear(predicted, [&](int t) {
       if ((train.points[static_cast<size_t>(t)] - predicted).squaredNorm() > radius2) return;
-      const int d = hamming256(descriptor, train.descriptors.ptr<std::uint8_t>(t));
+      const int d = hammingDistance256(descriptor, train.descriptors.ptr<std::uint8_t>(t));
       if (d < best_distance) {
         second_distance = best_distance;
         best_distance = d, best = t;
