@@ -17,7 +17,8 @@ std::vector<BowMatch> BowDatabase::query(const BowVector& bow, int max_results) 
     const auto postings = inverted_.find(word);
     if (postings == inverted_.end()) continue;
     for (const auto& [frame, stored] : postings->second) {
-      shared[frame] += std::abs(weight - stored) - std::abs(weight) - std::abs(stored);
+      const double x = weight, y = stored;
+      shared[frame] += std::abs(x - y) - std::abs(x) - std::abs(y);
     }
   }
   std::vector<BowMatch> matches;

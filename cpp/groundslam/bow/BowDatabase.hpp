@@ -24,7 +24,7 @@ class BowDatabase {
   int size() const { return frames_; }
 
  private:
-  std::unordered_map<int, std::vector<std::pair<int, double>>> inverted_;  ///< word -> (frame, weight)
+  std::unordered_map<int, std::vector<std::pair<int, float>>> inverted_;  ///< word -> (frame, weight)
   int frames_ = 0;
 };
 

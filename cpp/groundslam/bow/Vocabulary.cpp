@@ -162,14 +162,22 @@ int Vocabulary::wordOf(const std::uint8_t* descriptor) const {
 BowVector Vocabulary::transform(const cv::Mat& descriptors) const {
   BowVector bow;
   if (nodes_.empty()) return bow;
-  for (int r = 0; r < descriptors.rows; ++r) {
-    const int word = wordOf(descriptors.ptr<std::uint8_t>(r));
-    bow[word] += idf_[static_cast<size_t>(word)];  // term frequency times IDF
-  }
+  std::vector<int> words;
+  words.reserve(static_cast<size_t>(descriptors.rows));
+  for (int r = 0; r < descriptors.rows; ++r) words.push_back(wordOf(descriptors.ptr<std::uint8_t>(r)));
+  std::sort(words.begin(), words.end());
   double total = 0.0;
-  for (const auto& [word, weight] : bow) total += weight;
+  for (size_t i = 0; i < words.size();) {
+    size_t end = i;
+    while (end < words.size() && words[end] == words[i]) ++end;
+    // Term frequency times IDF.
+    const double weight = static_cast<double>(end - i) * idf_[static_cast<size_t>(words[i])];
+    bow.emplace_back(words[i], static_cast<float>(weight));
+    total += weight;
+    i = end;
+  }
   if (total > 0.0) {
-    for (auto& [word, weight] : bow) weight /= total;
+    for (auto& entry : bow) entry.second = static_cast<float>(entry.second / total);
   }
   return bow;
 }
@@ -185,7 +193,8 @@ double bowScore(const BowVector& a, const BowVector& b) {
     } else if (j->first < i->first) {
       ++j;
     } else {
-      shared += std::abs(i->second - j->second) - std::abs(i->second) - std::abs(j->second);
+      const double x = i->second, y = j->second;
+      shared += std::abs(x - y) - std::abs(x) - std::abs(y);
       ++i, ++j;
     }
   }

@@ -4,7 +4,7 @@
 
 #include <array>
 #include <cstdint>
-#include <map>
+#include <utility>
 #include <string>
 #include <vector>
 
@@ -14,8 +14,9 @@ namespace groundslam {
 
 using Descriptor = std::array<std::uint8_t, 32>;  ///< one 256-bit ORB descriptor
 
-/// Sparse bag-of-words vector: word id -> weight, L1-normalised.
-using BowVector = std::map<int, double>;
+/// Sparse bag-of-words vector: (word id, weight) sorted by word id, L1-normalised. A sorted vector, not a
+/// map: every frame keeps one, and a map's nodes would cost four times the memory.
+using BowVector = std::vector<std::pair<int, float>>;
 
 struct VocabularySettings {
   int branching = 10;  ///< children per node (k)
