@@ -22,10 +22,7 @@ struct FloorOptions {
 
 void measureFloor(const FloorOptions& o) {
   const Dataset dataset = openDataset(o.dataset);
-  std::vector<std::string> layers;
-  if (dataset.camera_yaml) layers.push_back(*dataset.camera_yaml);
-  if (!o.config.empty()) layers.push_back(o.config);
-  const Config config = loadConfig(layers);
+  const Config config = loadDatasetConfig(dataset.camera_yaml, o.config);
   cv::setNumThreads(1);
   const OrbExtractor extractor(config.features);
   const auto start = std::chrono::steady_clock::now();

@@ -32,10 +32,7 @@ struct RunOptions {
 };
 
 Config loadRunConfig(const Dataset& dataset, const RunOptions& o) {
-  std::vector<std::string> layers;
-  if (dataset.camera_yaml) layers.push_back(*dataset.camera_yaml);
-  if (!o.config.empty()) layers.push_back(o.config);
-  Config config = loadConfig(layers);
+  Config config = loadDatasetConfig(dataset.camera_yaml, o.config);
   if (o.no_loop_closure) config.loop_closure.enabled = false;
   return config;
 }

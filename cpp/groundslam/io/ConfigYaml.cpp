@@ -230,6 +230,13 @@ Config loadConfig(const std::vector<std::string>& paths) {
   return loader.finish();
 }
 
+Config loadDatasetConfig(const std::optional<std::string>& camera_yaml, const std::string& user_config) {
+  std::vector<std::string> layers;
+  if (camera_yaml) layers.push_back(*camera_yaml);
+  if (!user_config.empty()) layers.push_back(user_config);
+  return loadConfig(layers);
+}
+
 std::string configToYaml(const Config& config, const std::vector<std::string>& only_sections) {
   YAML::Emitter out;
   out.SetNullFormat(YAML::LowerNull);  // `null`, as conventions.md writes it

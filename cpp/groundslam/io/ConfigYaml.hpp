@@ -2,6 +2,7 @@
 // Reading and writing the run configuration as YAML (conventions.md). Files are applied in layers
 // over the defaults; unknown keys and bad values are errors that name the file, line and key.
 
+#include <optional>
 #include <set>
 #include <string>
 #include <vector>
@@ -29,6 +30,9 @@ class ConfigLoader {
 
 /// Loads files in order (later ones override earlier ones) and checks the required keys.
 Config loadConfig(const std::vector<std::string>& paths);
+
+/// A dataset's configuration: its camera.yaml (when it has one), then the user's file (when given).
+Config loadDatasetConfig(const std::optional<std::string>& camera_yaml, const std::string& user_config);
 
 /// The effective configuration as YAML text: every key, or only those of the named sections.
 std::string configToYaml(const Config& config, const std::vector<std::string>& only_sections = {});

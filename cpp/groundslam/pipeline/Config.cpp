@@ -15,6 +15,18 @@ CameraConfig cameraConfigOf(const CameraIntrinsics& k, double mounting_height_m)
   return camera;
 }
 
+CameraIntrinsics intrinsicsOf(const CameraConfig& c) {
+  CameraIntrinsics k;
+  k.width = c.image_width;
+  k.height = c.image_height;
+  k.fx = c.fx;
+  k.fy = c.fy;
+  k.cx = c.cx;
+  k.cy = c.cy;
+  k.distortion = c.distortion;
+  return k;
+}
+
 const std::vector<std::string>& requiredConfigKeys() {
   static const std::vector<std::string> keys = {
       "camera.image_width", "camera.image_height", "camera.fx",         "camera.fy",

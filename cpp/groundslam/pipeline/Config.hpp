@@ -73,6 +73,9 @@ using Choices = std::vector<std::string>;
 /// The camera section describing a camera with the default straight-down mount at `mounting_height_m`.
 CameraConfig cameraConfigOf(const CameraIntrinsics& intrinsics, double mounting_height_m);
 
+/// The intrinsics a camera section describes.
+CameraIntrinsics intrinsicsOf(const CameraConfig& camera);
+
 /// Keys that a configuration must set (conventions.md): "section.key".
 const std::vector<std::string>& requiredConfigKeys();
 

@@ -19,7 +19,6 @@ const char* loopGateName(LoopGate gate) {
     case LoopGate::matches: return "matches";
     case LoopGate::covariance: return "covariance";
     case LoopGate::ambiguous: return "ambiguous";
-    case LoopGate::inconsistent: return "inconsistent";
   }
   return "unknown";
 }

@@ -41,7 +41,7 @@ struct LoopClosureSettings {
 };
 
 /// Which gate a candidate failed ("" when accepted).
-enum class LoopGate { none, bow_score, matches, covariance, ambiguous, inconsistent };
+enum class LoopGate { none, bow_score, matches, covariance, ambiguous };
 const char* loopGateName(LoopGate gate);
 
 /// One verified candidate: frame_a (earlier) against frame_b (current).

@@ -34,20 +34,12 @@ std::pair<std::vector<Eigen::Vector2d>, std::vector<Eigen::Vector2d>> matchedPoi
 }  // namespace
 
 CameraModel cameraModelFrom(const CameraConfig& c) {
-  CameraIntrinsics k;
-  k.width = c.image_width;
-  k.height = c.image_height;
-  k.fx = c.fx;
-  k.fy = c.fy;
-  k.cx = c.cx;
-  k.cy = c.cy;
-  k.distortion = c.distortion;
   Eigen::Isometry3d T_robot_camera = defaultCameraMount(c.mounting_height_m);
   if (c.T_robot_camera) {
     const Eigen::Matrix<double, 4, 4, Eigen::RowMajor> T(c.T_robot_camera->data());
     T_robot_camera.matrix() = T;
   }
-  return CameraModel(k, T_robot_camera);
+  return CameraModel(intrinsicsOf(c), T_robot_camera);
 }
 
 Slam::Slam(const Config& config, std::shared_ptr<const Vocabulary> vocabulary)
