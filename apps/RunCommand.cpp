@@ -1,5 +1,6 @@
 // `groundslam run DATASET`: runs SLAM on a sequence and writes the results into a run folder.
 #include <chrono>
+#include <deque>
 #include <filesystem>
 #include <future>
 #include <iostream>
@@ -43,26 +44,32 @@ std::shared_ptr<const Vocabulary> loadVocabulary(const Config& config) {
   return std::make_shared<const Vocabulary>(readVocabulary(path));
 }
 
-/// Runs every frame through the pipeline, with a progress line on a terminal. The next frame is decoded and
-/// its features extracted on a second thread while the current one goes through the back end.
+/// Runs every frame through the pipeline, with a progress line on a terminal. The next frames are decoded
+/// and their features extracted on other threads (a FramePreparer each) while the current one goes
+/// through the back end, so both cores stay busy.
 std::vector<FrameResult> processAll(const Dataset& dataset, const Config& config, Slam& slam, std::vector<double>& load_ms) {
   struct Loaded {
     double load_ms;
     PreparedFrame frame;
   };
+  constexpr size_t kPrefetch = 2;  // frames in preparation, one preparer each
+  std::vector<FramePreparer> preparers(kPrefetch, FramePreparer(config));
   auto prepare = [&](size_t i) {
     const auto start = std::chrono::steady_clock::now();
     const DatasetFrame& frame = dataset.frames[i];
     const cv::Mat image = loadGrayImage(frame.image_path, config.camera.image_width, config.camera.image_height);
     const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-    return Loaded{ms, slam.prepareFrame(image, frame.timestamp)};
+    return Loaded{ms, preparers[i % kPrefetch].prepare(image, frame.timestamp)};
   };
+  const size_t n = dataset.frames.size();
+  std::deque<std::future<Loaded>> ahead;  // frames i, i+1, ... in order; frame j uses preparer j % kPrefetch
+  for (size_t j = 0; j < std::min(n, kPrefetch); ++j) ahead.push_back(std::async(std::launch::async, prepare, j));
   std::vector<FrameResult> results;
-  Progress progress("run", static_cast<int>(dataset.frames.size()));
-  std::future<Loaded> next = std::async(std::launch::async, prepare, 0);
-  for (size_t i = 0; i < dataset.frames.size(); ++i) {
-    Loaded current = next.get();
-    if (i + 1 < dataset.frames.size()) next = std::async(std::launch::async, prepare, i + 1);
+  Progress progress("run", static_cast<int>(n));
+  for (size_t i = 0; i < n; ++i) {
+    Loaded current = ahead.front().get();
+    ahead.pop_front();
+    if (i + kPrefetch < n) ahead.push_back(std::async(std::launch::async, prepare, i + kPrefetch));
     load_ms.push_back(current.load_ms);
     results.push_back(slam.process(std::move(current.frame)));
     progress.update(static_cast<int>(results.size()));

@@ -21,11 +21,13 @@ class BowDatabase {
   /// The best `max_results` frames by score, best first. Cost grows with the postings of the
   /// query's words, not with the frames that share none of them.
   std::vector<BowMatch> query(const BowVector& bow, int max_results) const;
-  int size() const { return frames_; }
+  int size() const { return static_cast<int>(frames_.size()); }
 
  private:
-  std::unordered_map<int, std::vector<std::pair<int, float>>> inverted_;  ///< word -> (frame, weight)
-  int frames_ = 0;
+  std::unordered_map<int, std::vector<std::pair<int, float>>> inverted_;  ///< word -> (entry, weight)
+  std::vector<int> frames_;  ///< entry -> frame id; entries are dense, so scores accumulate in an array
+  mutable std::vector<double> sums_;   ///< per entry, all zero between queries
+  mutable std::vector<int> touched_;   ///< entries with a non-zero sum during a query
 };
 
 }  // namespace groundslam

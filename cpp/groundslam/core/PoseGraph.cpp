@@ -1,6 +1,8 @@
 #include "groundslam/core/PoseGraph.hpp"
 
+#include <algorithm>
 #include <array>
+#include <unordered_map>
 #include <cmath>
 
 #include <Eigen/Cholesky>
@@ -53,24 +55,47 @@ int PoseGraph::addPose(const Pose2& initial_T_world_robot) {
   return static_cast<int>(poses_.size()) - 1;
 }
 
-void PoseGraph::addEdge(const GraphEdge& edge) { edges_.push_back(edge); }
+void PoseGraph::addEdge(const GraphEdge& edge) {
+  const auto last_pose = [](const GraphEdge& e) { return std::max(e.from, e.to); };
+  if (!edges_.empty() && last_pose(edge) < last_pose(edges_.back())) edges_in_pose_order_ = false;
+  edges_.push_back(edge);
+}
 
-OptimisationSummary PoseGraph::optimise() {
+OptimisationSummary PoseGraph::optimise(int first_free) {
   OptimisationSummary result;
-  if (poses_.size() < 2) return result;
-  std::vector<std::array<double, 3>> parameters(poses_.size());
-  for (size_t i = 0; i < poses_.size(); ++i) parameters[i] = {poses_[i].x, poses_[i].y, poses_[i].theta};
+  first_free = std::max(first_free, 0);
+  if (poses_.size() < 2 || first_free >= static_cast<int>(poses_.size())) return result;
+  // Edges touching the window: with edges in pose order they are a suffix of edges_.
+  const auto last_pose = [](const GraphEdge& e) { return std::max(e.from, e.to); };
+  auto first_edge = edges_.begin();
+  if (edges_in_pose_order_) {
+    first_edge = std::partition_point(edges_.begin(), edges_.end(), [&](const GraphEdge& e) { return last_pose(e) < first_free; });
+  }
+  // Parameter blocks: the window's poses, and the fixed poses outside it that its edges reach.
+  std::unordered_map<int, std::array<double, 3>> parameters;
+  const auto block = [&](int pose) {
+    auto [it, added] = parameters.try_emplace(pose);
+    if (added) {
+      const Pose2& p = poses_[static_cast<size_t>(pose)];
+      it->second = {p.x, p.y, p.theta};
+    }
+    return it->second.data();
+  };
   ceres::Problem problem;
-  for (const GraphEdge& edge : edges_) {
+  for (auto edge = first_edge; edge != edges_.end(); ++edge) {
+    if (last_pose(*edge) < first_free) continue;
     // The upper Cholesky factor U of the information (I = U^T U) whitens the error.
-    const Eigen::Matrix3d sqrt_information = edge.information.llt().matrixU();
-    auto* cost = new ceres::AutoDiffCostFunction<EdgeResidual, 3, 3, 3>(new EdgeResidual(edge.T_from_to, sqrt_information));
-    ceres::LossFunction* loss = edge.loop ? new ceres::CauchyLoss(settings_.loop_loss_scale) : nullptr;
-    problem.AddResidualBlock(cost, loss, parameters[static_cast<size_t>(edge.from)].data(),
-                             parameters[static_cast<size_t>(edge.to)].data());
+    const Eigen::Matrix3d sqrt_information = edge->information.llt().matrixU();
+    auto* cost = new ceres::AutoDiffCostFunction<EdgeResidual, 3, 3, 3>(new EdgeResidual(edge->T_from_to, sqrt_information));
+    ceres::LossFunction* loss = edge->loop ? new ceres::CauchyLoss(settings_.loop_loss_scale) : nullptr;
+    problem.AddResidualBlock(cost, loss, block(edge->from), block(edge->to));
   }
   // The map frame is the first pose: without fixing it the solution could slide freely (gauge freedom).
-  if (problem.HasParameterBlock(parameters[0].data())) problem.SetParameterBlockConstant(parameters[0].data());
+  // Poses before the window are held where they are.
+  for (auto& [pose, values] : parameters) {
+    if (pose == 0 || pose < first_free) problem.SetParameterBlockConstant(values.data());
+  }
+  if (problem.NumResidualBlocks() == 0) return result;
   ceres::Solver::Options options;
   options.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
   options.minimizer_type = ceres::TRUST_REGION;
@@ -79,7 +104,9 @@ OptimisationSummary PoseGraph::optimise() {
   options.num_threads = 1;
   ceres::Solver::Summary summary;
   ceres::Solve(options, &problem, &summary);
-  for (size_t i = 0; i < poses_.size(); ++i) poses_[i] = Pose2(parameters[i][0], parameters[i][1], parameters[i][2]);
+  for (const auto& [pose, v] : parameters) {
+    if (pose >= first_free) poses_[static_cast<size_t>(pose)] = Pose2(v[0], v[1], v[2]);
+  }
   result.converged = summary.termination_type == ceres::CONVERGENCE;
   result.iterations = static_cast<int>(summary.iterations.size());
   result.initial_cost = summary.initial_cost;

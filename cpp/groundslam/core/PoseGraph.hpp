@@ -39,7 +39,11 @@ class PoseGraph {
   int addPose(const Pose2& initial_T_world_robot);
   void addEdge(const GraphEdge& edge);
   /// Optimises all poses, starting from the current estimates.
-  OptimisationSummary optimise();
+  OptimisationSummary optimise() { return optimise(0); }
+  /// Optimises poses first_free..last only, holding the earlier ones that edges tie them to fixed: the
+  /// cost depends on the window, not on the size of the graph (when edges arrive in the order of their
+  /// later pose, as a SLAM front end adds them).
+  OptimisationSummary optimise(int first_free);
 
   const std::vector<Pose2>& poses() const { return poses_; }
   const std::vector<GraphEdge>& edges() const { return edges_; }
@@ -49,6 +53,7 @@ class PoseGraph {
   PoseGraphSettings settings_;
   std::vector<Pose2> poses_;
   std::vector<GraphEdge> edges_;
+  bool edges_in_pose_order_ = true;  ///< max(from, to) never decreases along edges_
 };
 
 /// Information matrix from a covariance, with a floor on the standard deviations (unmodelled errors).

@@ -44,6 +44,11 @@ struct GraphConfig {
   double min_sigma_m = 0.0005;     ///< floor on an edge's position standard deviation (unmodelled errors: a rocking mount)
   double min_sigma_rad = 0.0005;   ///< floor on an edge's heading standard deviation
   int optimise_every_frames = 10;  ///< after a loop closure, optimise at most this often (and once at the end)
+  /// Optimise only the last this many poses, the earlier ones held fixed (0: the whole graph every time).
+  /// The whole graph is optimised at the end and after closing a loop around a longer path than
+  /// full_optimisation_after_m.
+  int window_frames = 100;
+  double full_optimisation_after_m = 5.0;
   PoseGraphSettings solver;
 };
 
@@ -117,8 +122,11 @@ void visitConfigFields(Config_& c, Visitor&& v) {
   v("loop_closure", "vocabulary", c.loop_closure.vocabulary, Choices{});
   v("loop_closure", "database_delay_frames", c.loop_closure.database_delay_frames, Range{1, 1e9});
   v("loop_closure", "max_candidates", c.loop_closure.max_candidates, Range{0, 1000});
+  v("loop_closure", "max_nearby_places", c.loop_closure.max_nearby_places, Range{0, 100000});
   v("loop_closure", "max_global_candidates", c.loop_closure.max_global_candidates, Range{0, 1000});
   v("loop_closure", "search_radius_m", c.loop_closure.search_radius_m, kNonNegative);
+  v("loop_closure", "max_search_radius_m", c.loop_closure.max_search_radius_m, kNonNegative);
+  v("loop_closure", "place_spacing_m", c.loop_closure.place_spacing_m, kNonNegative);
   v("loop_closure", "min_bow_score", c.loop_closure.min_bow_score, Range{0.0, 1.0});
   v("loop_closure", "min_matches", c.loop_closure.min_matches, Range{3, 1e9});
   v("loop_closure", "min_inliers", c.loop_closure.min_inliers, Range{3, 1e9});
@@ -131,6 +139,8 @@ void visitConfigFields(Config_& c, Visitor&& v) {
   v("graph", "min_sigma_m", c.graph.min_sigma_m, kNonNegative);
   v("graph", "min_sigma_rad", c.graph.min_sigma_rad, kNonNegative);
   v("graph", "optimise_every_frames", c.graph.optimise_every_frames, Range{1, 1e9});
+  v("graph", "window_frames", c.graph.window_frames, Range{0, 1e9});
+  v("graph", "full_optimisation_after_m", c.graph.full_optimisation_after_m, kNonNegative);
   v("graph", "loop_loss_scale", c.graph.solver.loop_loss_scale, kPositive);
   v("graph", "max_iterations", c.graph.solver.max_iterations, Range{1, 10000});
 }

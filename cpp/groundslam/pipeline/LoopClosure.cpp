@@ -25,50 +25,68 @@ const char* loopGateName(LoopGate gate) {
 
 LoopCloser::LoopCloser(const LoopClosureSettings& settings, std::shared_ptr<const Vocabulary> vocabulary,
                        const MatcherSettings& matching, const FitSettings& fitting)
-    : settings_(settings), vocabulary_(std::move(vocabulary)), matching_ratio_(matching.ratio), fitting_(fitting) {
+    : settings_(settings),
+      vocabulary_(std::move(vocabulary)),
+      matching_ratio_(matching.ratio),
+      fitting_(fitting),
+      places_(kFootprintReachM) {
   fitting_.measure_ambiguity = true;
   fitting_.min_inliers = settings.min_inliers;
 }
 
 std::vector<LoopCandidate> LoopCloser::process(int frame, const GroundFeatures& features, const std::vector<Pose2>& estimates) {
-  features_.push_back(features);
-  bow_.push_back(vocabulary_->transform(features.descriptors));
+  BowVector bow = vocabulary_->transform(features.descriptors);
   const double step = frame > 0 ? (estimates[static_cast<size_t>(frame)].translation() -
                                    estimates[static_cast<size_t>(frame) - 1].translation()).norm()
                                 : 0.0;
   path_length_m_.push_back((path_length_m_.empty() ? 0.0 : path_length_m_.back()) + step);
   std::vector<LoopCandidate> candidates;
-  for (const BowMatch& match : selectCandidates(frame, estimates)) {
-    LoopCandidate candidate = verify(match.frame, features_[static_cast<size_t>(match.frame)], frame, features, match.score,
-                                     priorOf(match.frame, frame, estimates));
+  for (const BowMatch& match : selectCandidates(frame, bow, estimates)) {
+    const Place& place = *places_.find(match.frame);
+    LoopCandidate candidate =
+        verify(match.frame, place.features(), frame, features, match.score, priorOf(match.frame, frame, estimates));
+    candidate.drift_path_m = driftPathLength(match.frame, frame);
     if (candidate.accepted()) last_loop_a_ = candidate.frame_a, last_loop_b_ = candidate.frame_b;
     candidates.push_back(candidate);
   }
-  // The paper's delay: frame n-k enters the database only now, so neighbours never close loops.
-  const int entering = frame - settings_.database_delay_frames;
-  if (entering >= 0) database_.add(entering, bow_[static_cast<size_t>(entering)]);
+  pending_.push_back({frame, features, std::move(bow)});
+  admitPlaces(frame, estimates);
   return candidates;
 }
 
-std::vector<BowMatch> LoopCloser::selectCandidates(int frame, const std::vector<Pose2>& estimates) const {
-  // Frames whose footprint may overlap this one's, given the drift since the last correction, ranked by
-  // BoW score; then the best of the whole database (the paper's global search), in case drift is larger.
-  const BowVector& bow = bow_[static_cast<size_t>(frame)];
+void LoopCloser::admitPlaces(int frame, const std::vector<Pose2>& estimates) {
+  // The paper's delay: frame n-k may be found only from frame n on, so neighbours never close loops. It
+  // becomes a place unless the map already covers its footprint; then only its pose is kept.
+  while (!pending_.empty() && pending_.front().frame <= frame - settings_.database_delay_frames) {
+    Pending& entering = pending_.front();
+    const Pose2& pose = estimates[static_cast<size_t>(entering.frame)];
+    if (!places_.covers(pose, settings_.place_spacing_m, estimates)) {
+      places_.add(entering.frame, entering.features, std::move(entering.bow), estimates);
+    }
+    pending_.pop_front();
+  }
+}
+
+std::vector<BowMatch> LoopCloser::selectCandidates(int frame, const BowVector& bow, const std::vector<Pose2>& estimates) const {
+  // The nearest places whose footprint may overlap this one's, given the drift since the last correction,
+  // ranked by BoW score; then the best of the whole map (the paper's global search), in case drift is larger.
   const Eigen::Vector2d here = estimates[static_cast<size_t>(frame)].translation();
   std::vector<BowMatch> nearby;
-  const int last_in_database = frame - settings_.database_delay_frames;
-  for (int a = 0; a <= last_in_database; ++a) {
+  for (const int a : places_.framesNear(here, settings_.max_search_radius_m, estimates)) {
+    if (static_cast<int>(nearby.size()) >= settings_.max_nearby_places) break;
     const double reach = settings_.search_radius_m + settings_.max_disagreement_m +
                          settings_.max_disagreement_per_m * driftPathLength(a, frame);
     if ((estimates[static_cast<size_t>(a)].translation() - here).norm() <= reach) {
-      nearby.push_back({a, bowScore(bow, bow_[static_cast<size_t>(a)])});
+      nearby.push_back({a, bowScore(bow, places_.find(a)->bow)});
     }
   }
   const auto better = [](const BowMatch& x, const BowMatch& y) { return x.score > y.score || (x.score == y.score && x.frame < y.frame); };
   std::sort(nearby.begin(), nearby.end(), better);
   if (static_cast<int>(nearby.size()) > settings_.max_candidates) nearby.resize(static_cast<size_t>(settings_.max_candidates));
-  for (const BowMatch& global : database_.query(bow, settings_.max_candidates + settings_.max_global_candidates)) {
-    if (static_cast<int>(nearby.size()) >= settings_.max_candidates + settings_.max_global_candidates) break;
+  const size_t wanted = static_cast<size_t>(settings_.max_candidates + settings_.max_global_candidates);
+  if (settings_.max_global_candidates == 0) return nearby;
+  for (const BowMatch& global : places_.query(bow, static_cast<int>(wanted))) {
+    if (nearby.size() >= wanted) break;
     const bool chosen = std::any_of(nearby.begin(), nearby.end(), [&](const BowMatch& m) { return m.frame == global.frame; });
     if (!chosen) nearby.push_back(global);
   }

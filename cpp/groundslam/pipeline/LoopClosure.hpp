@@ -1,8 +1,10 @@
 #pragma once
 // Paper §III-C: loop closure. Frame n-k enters the bag-of-words database when frame n arrives; frame n
 // queries it, and the best few candidates by BoW score must pass three gates, cheapest first:
-// BoW score, number of matched keypoints, and the covariance score of the robust fit.
+// BoW score, number of matched keypoints, and the covariance score of the robust fit. Only frames that
+// cover new ground are kept as places (PlaceMap), so the cost of a frame does not grow with the run.
 
+#include <deque>
 #include <memory>
 #include <string>
 #include <cmath>
@@ -17,6 +19,7 @@
 #include "groundslam/core/FeatureExtraction.hpp"
 #include "groundslam/core/Matching.hpp"
 #include "groundslam/core/RigidFit.hpp"
+#include "groundslam/pipeline/PlaceMap.hpp"
 
 namespace groundslam {
 
@@ -25,8 +28,11 @@ struct LoopClosureSettings {
   std::string vocabulary;            ///< vocabulary file; empty: the default shipped with groundslam
   int database_delay_frames = 20;    ///< k: frame n-k enters the database when frame n arrives
   int max_candidates = 4;            ///< candidates near the estimate verified per frame, best BoW scores first
+  int max_nearby_places = 16;        ///< the nearest places within reach are BoW-scored; the best become candidates
   int max_global_candidates = 1;     ///< further candidates from the whole database (the paper's search)
   double search_radius_m = 0.25;     ///< frames this close to the estimate (plus the drift allowance) are near
+  double max_search_radius_m = 0.5;  ///< cap on that reach; larger drift is left to the global search
+  double place_spacing_m = 0.02;     ///< a frame becomes a place unless one lies this close (+ 0.15 m * heading difference)
   double min_bow_score = 0.04;       ///< gate 1
   int min_matches = 30;              ///< gate 2: ratio-test matches between the two frames
   int min_inliers = 25;              ///< gate 3: a loop fit with fewer inliers has failed (unbounded covariance)
@@ -53,6 +59,7 @@ struct LoopCandidate {
   double covariance_score = std::nan("");  ///< NaN when not fitted, +inf when the fit failed
   int inliers = 0;
   double ambiguity = std::nan("");     ///< rival transform's support / the fit's; NaN when not fitted
+  double drift_path_m = 0.0;           ///< path length over which the estimate of T_a_b could have drifted
   LoopGate rejected_by = LoopGate::none;
   Pose2 T_a_b;                         ///< pose of b's robot in a's robot frame (when fitted)
   Eigen::Matrix3d covariance = Eigen::Matrix3d::Identity();
@@ -67,9 +74,19 @@ class LoopCloser {
   /// Verifies frame `frame`'s candidates against the database, then lets frame - k into it. `estimates`
   /// holds the current pose estimate of every frame up to this one. Returns every candidate verified.
   std::vector<LoopCandidate> process(int frame, const GroundFeatures& features, const std::vector<Pose2>& estimates);
+  /// Re-files the places under their current estimates, after an optimisation moved the whole map.
+  void mapMoved(const std::vector<Pose2>& estimates) { places_.reindex(estimates); }
+  const PlaceMap& places() const { return places_; }
 
  private:
-  std::vector<BowMatch> selectCandidates(int frame, const std::vector<Pose2>& estimates) const;
+  /// A frame waiting its k frames before it may become a place.
+  struct Pending {
+    int frame = 0;
+    GroundFeatures features;
+    BowVector bow;
+  };
+  std::vector<BowMatch> selectCandidates(int frame, const BowVector& bow, const std::vector<Pose2>& estimates) const;
+  void admitPlaces(int frame, const std::vector<Pose2>& estimates);
   LoopCandidate verify(int frame_a, const GroundFeatures& a, int frame_b, const GroundFeatures& b, double bow_score,
                        const TransformPrior& prior) const;
   /// The estimated T_a_b and how far drift since the last correction may have moved it.
@@ -81,10 +98,9 @@ class LoopCloser {
   std::shared_ptr<const Vocabulary> vocabulary_;
   double matching_ratio_;
   FitSettings fitting_;
-  BowDatabase database_;
-  std::vector<GroundFeatures> features_;  ///< of every frame, by index
-  std::vector<BowVector> bow_;            ///< of every frame
-  std::vector<double> path_length_m_;     ///< estimated distance driven up to each frame
+  PlaceMap places_;
+  std::deque<Pending> pending_;        ///< the last k frames, not yet in the map
+  std::vector<double> path_length_m_;  ///< estimated distance driven up to each frame
   int last_loop_a_ = -1, last_loop_b_ = -1;  ///< the latest accepted loop closure
 };
 

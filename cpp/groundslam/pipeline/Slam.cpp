@@ -33,19 +33,9 @@ std::pair<std::vector<Eigen::Vector2d>, std::vector<Eigen::Vector2d>> matchedPoi
 
 }  // namespace
 
-CameraModel cameraModelFrom(const CameraConfig& c) {
-  Eigen::Isometry3d T_robot_camera = defaultCameraMount(c.mounting_height_m);
-  if (c.T_robot_camera) {
-    const Eigen::Matrix<double, 4, 4, Eigen::RowMajor> T(c.T_robot_camera->data());
-    T_robot_camera.matrix() = T;
-  }
-  return CameraModel(intrinsicsOf(c), T_robot_camera);
-}
-
 Slam::Slam(const Config& config, std::shared_ptr<const Vocabulary> vocabulary)
     : config_(config),
-      camera_(cameraModelFrom(config.camera)),
-      extractor_(config.features),
+      preparer_(config),
       matcher_(config.matching),
       graph_(config.graph.solver) {
   if (config.loop_closure.enabled && vocabulary && !vocabulary->empty()) {
@@ -54,18 +44,6 @@ Slam::Slam(const Config& config, std::shared_ptr<const Vocabulary> vocabulary)
 }
 
 FrameResult Slam::process(const cv::Mat& image, double timestamp) { return process(prepareFrame(image, timestamp)); }
-
-PreparedFrame Slam::prepareFrame(const cv::Mat& image, double timestamp) const {
-  // §III-A: ORB keypoints and descriptors, projected to metric points on the ground plane (eqs. 2-4).
-  StageTimer timer;
-  PreparedFrame prepared;
-  prepared.timestamp = timestamp;
-  const ImageFeatures image_features = extractor_.detect(image);
-  prepared.extract_ms = timer.lap();
-  prepared.features = dropNearTwins(projectToGround(image_features, camera_), config_.features.near_twin_max_distance);
-  prepared.project_ms = timer.lap();
-  return prepared;
-}
 
 FrameResult Slam::process(PreparedFrame prepared) {
   StageTimer total;
@@ -121,16 +99,27 @@ void Slam::closeLoops(const Keyframe& current, FrameResult& result) {
                     informationFrom(candidate.covariance, config_.graph.min_sigma_m, config_.graph.min_sigma_rad), true});
     ++result.loop_closures;
     ++unoptimised_loops_;
+    if (candidate.drift_path_m > config_.graph.full_optimisation_after_m) full_optimisation_due_ = true;
   }
   result.times.loop_ms = timer.lap();
 }
 
-void Slam::optimiseIfDue(FrameResult& result, bool force) {
+void Slam::optimiseIfDue(FrameResult& result, bool at_end) {
   const int frame = static_cast<int>(graph_.poses().size()) - 1;
-  if (unoptimised_loops_ == 0) return;
-  if (!force && frame - last_optimised_frame_ < config_.graph.optimise_every_frames) return;
+  if (at_end) {
+    if (unoptimised_loops_ == 0 && !window_solved_) return;
+  } else if (unoptimised_loops_ == 0 || frame - last_optimised_frame_ < config_.graph.optimise_every_frames) {
+    return;
+  }
+  // Usually only the recent window moves, held to the fixed map by its loop edges: the cost stays flat. A
+  // loop around a long path spreads its correction over the whole path, as does the end of the run.
   StageTimer timer;
-  graph_.optimise();  // warm start: the current estimates are the initial values
+  const int window = config_.graph.window_frames;
+  const bool full = at_end || full_optimisation_due_ || window == 0 || frame < window;
+  graph_.optimise(full ? 0 : frame + 1 - window);  // warm start: the current estimates are the initial values
+  if (full && loop_closer_) loop_closer_->mapMoved(graph_.poses());
+  window_solved_ = !full;
+  full_optimisation_due_ = false;
   unoptimised_loops_ = 0;
   last_optimised_frame_ = frame;
   result.times.optimise_ms = timer.lap();

@@ -17,27 +17,17 @@
 #include "groundslam/core/RigidFit.hpp"
 #include "groundslam/core/Trajectory.hpp"
 #include "groundslam/pipeline/Config.hpp"
+#include "groundslam/pipeline/FramePreparer.hpp"
 #include "groundslam/pipeline/FrameResult.hpp"
 #include "groundslam/pipeline/LoopClosure.hpp"
 
 namespace groundslam {
-
-/// The camera model a configuration describes (default mount unless T_robot_camera is given).
-CameraModel cameraModelFrom(const CameraConfig& camera);
 
 /// A processed image: its metric ground features, all that is kept of it.
 struct Keyframe {
   int index = 0;
   double timestamp = 0.0;
   GroundFeatures features;
-};
-
-/// An image after §III-A, ready for the rest of the pipeline.
-struct PreparedFrame {
-  double timestamp = 0.0;
-  GroundFeatures features;
-  double extract_ms = 0.0;
-  double project_ms = 0.0;
 };
 
 /// The relative motion between consecutive frames and how it was obtained.
@@ -58,12 +48,15 @@ class Slam {
   /// Processes the next image (8-bit grey) of the sequence: prepareFrame, then process.
   FrameResult process(const cv::Mat& image, double timestamp);
   /// Image processing alone (§III-A). It reads no state that process() changes, so an application may
-  /// prepare the next frame on another thread while process() runs (one prepareFrame at a time).
-  PreparedFrame prepareFrame(const cv::Mat& image, double timestamp) const;
+  /// prepare the next frame on another thread while process() runs (one prepareFrame at a time; more at
+  /// once need a FramePreparer each).
+  PreparedFrame prepareFrame(const cv::Mat& image, double timestamp) const { return preparer_.prepare(image, timestamp); }
   /// Odometry, loop closure and optimisation (§III-B, §III-C) of a prepared frame.
   FrameResult process(PreparedFrame frame);
-  /// Optimises the graph once more if loop closures arrived since the last optimisation.
+  /// Optimises the whole graph once more if anything changed since its last full optimisation.
   void finish();
+  /// The loop closer's places (null when loop closure is disabled).
+  const PlaceMap* places() const { return loop_closer_ ? &loop_closer_->places() : nullptr; }
 
   /// The current estimate of every processed frame's pose.
   Trajectory trajectory() const;
@@ -76,11 +69,10 @@ class Slam {
   OdometryEdge fallbackOdometry(OdometryEdge failed) const;
   void addToGraph(const OdometryEdge& odometry);
   void closeLoops(const Keyframe& current, FrameResult& result);
-  void optimiseIfDue(FrameResult& result, bool force);
+  void optimiseIfDue(FrameResult& result, bool at_end);
 
   Config config_;
-  CameraModel camera_;
-  OrbExtractor extractor_;
+  FramePreparer preparer_;
   DescriptorMatcher matcher_;
   std::optional<LoopCloser> loop_closer_;
   PoseGraph graph_;
@@ -89,6 +81,8 @@ class Slam {
   std::vector<double> timestamps_;
   std::vector<LoopCandidate> candidates_;
   int unoptimised_loops_ = 0;
+  bool full_optimisation_due_ = false;  ///< a loop around a path longer than graph.full_optimisation_after_m closed
+  bool window_solved_ = false;          ///< a windowed optimisation ran since the last full one
   int last_optimised_frame_ = -1000000;
 };
 

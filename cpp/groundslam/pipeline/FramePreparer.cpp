@@ -1,0 +1,36 @@
+#include "groundslam/pipeline/FramePreparer.hpp"
+
+#include <chrono>
+
+namespace groundslam {
+
+CameraModel cameraModelFrom(const CameraConfig& c) {
+  Eigen::Isometry3d T_robot_camera = defaultCameraMount(c.mounting_height_m);
+  if (c.T_robot_camera) {
+    const Eigen::Matrix<double, 4, 4, Eigen::RowMajor> T(c.T_robot_camera->data());
+    T_robot_camera.matrix() = T;
+  }
+  return CameraModel(intrinsicsOf(c), T_robot_camera);
+}
+
+FramePreparer::FramePreparer(const Config& config)
+    : camera_(cameraModelFrom(config.camera)),
+      extractor_(config.features),
+      near_twin_max_distance_(config.features.near_twin_max_distance) {}
+
+PreparedFrame FramePreparer::prepare(const cv::Mat& image, double timestamp) const {
+  // ORB keypoints and descriptors, projected to metric points on the ground plane (paper eqs. 2-4).
+  using Clock = std::chrono::steady_clock;
+  const auto ms_since = [](Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); };
+  PreparedFrame prepared;
+  prepared.timestamp = timestamp;
+  const auto start = Clock::now();
+  const ImageFeatures image_features = extractor_.detect(image);
+  prepared.extract_ms = ms_since(start);
+  const auto projected = Clock::now();
+  prepared.features = dropNearTwins(projectToGround(image_features, camera_), near_twin_max_distance_);
+  prepared.project_ms = ms_since(projected);
+  return prepared;
+}
+
+}  // namespace groundslam

@@ -1,0 +1,37 @@
+#pragma once
+// Paper §III-A, image processing: ORB keypoints and descriptors, projected to metric points on the
+// ground plane. It keeps no state between images, so applications may prepare the next images on other
+// threads while the back end works on the current one.
+
+#include <opencv2/core.hpp>
+
+#include "groundslam/core/CameraModel.hpp"
+#include "groundslam/core/FeatureExtraction.hpp"
+#include "groundslam/pipeline/Config.hpp"
+
+namespace groundslam {
+
+/// The camera model a configuration describes (default mount unless T_robot_camera is given).
+CameraModel cameraModelFrom(const CameraConfig& camera);
+
+/// An image after §III-A, ready for the rest of the pipeline.
+struct PreparedFrame {
+  double timestamp = 0.0;
+  GroundFeatures features;
+  double extract_ms = 0.0;
+  double project_ms = 0.0;
+};
+
+class FramePreparer {
+ public:
+  explicit FramePreparer(const Config& config);
+  /// One image (8-bit grey) at a time per FramePreparer; use one each for images prepared concurrently.
+  PreparedFrame prepare(const cv::Mat& image, double timestamp) const;
+
+ private:
+  CameraModel camera_;
+  OrbExtractor extractor_;
+  int near_twin_max_distance_;
+};
+
+}  // namespace groundslam

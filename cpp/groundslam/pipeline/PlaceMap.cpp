@@ -1,0 +1,110 @@
+#include "groundslam/pipeline/PlaceMap.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace groundslam {
+namespace {
+
+constexpr double kCellSizeM = 0.25;
+/// Places are filed under the estimate they had when filed; windowed optimisations move them by far less
+/// than this before the next reindex, so searching this much wider finds them all.
+constexpr double kFilingMarginM = 0.05;
+
+std::uint64_t cellKey(std::int64_t cx, std::int64_t cy) {
+  return (static_cast<std::uint64_t>(cx) << 32) ^ (static_cast<std::uint64_t>(cy) & 0xffffffffu);
+}
+
+}  // namespace
+
+GroundFeatures Place::features() const {
+  GroundFeatures features;
+  features.points.reserve(points.size());
+  for (const Eigen::Vector2f& p : points) features.points.push_back(p.cast<double>());
+  features.descriptors = descriptors;  // shares the data
+  return features;
+}
+
+size_t Place::bytes() const {
+  const size_t bow_bytes = bow.size() * sizeof(BowVector::value_type);
+  return sizeof(Place) + points.size() * sizeof(Eigen::Vector2f) + descriptors.total() * descriptors.elemSize() +
+         2 * bow_bytes;  // the vector and its postings in the database
+}
+
+PlaceMap::PlaceMap(double reach_m) : reach_m_(reach_m) {}
+
+PlaceMap::CellKey PlaceMap::cellOf(const Eigen::Vector2d& position) const {
+  const auto cx = static_cast<std::int64_t>(std::floor(position.x() / kCellSizeM));
+  const auto cy = static_cast<std::int64_t>(std::floor(position.y() / kCellSizeM));
+  return cellKey(cx, cy);
+}
+
+template <class F>
+void PlaceMap::forEachFiledNear(const Eigen::Vector2d& where, double radius_m, F&& f) const {
+  const double r = radius_m + kFilingMarginM;
+  const auto lo_x = static_cast<std::int64_t>(std::floor((where.x() - r) / kCellSizeM));
+  const auto hi_x = static_cast<std::int64_t>(std::floor((where.x() + r) / kCellSizeM));
+  const auto lo_y = static_cast<std::int64_t>(std::floor((where.y() - r) / kCellSizeM));
+  const auto hi_y = static_cast<std::int64_t>(std::floor((where.y() + r) / kCellSizeM));
+  for (std::int64_t cx = lo_x; cx <= hi_x; ++cx) {
+    for (std::int64_t cy = lo_y; cy <= hi_y; ++cy) {
+      const auto cell = grid_.find(cellKey(cx, cy));
+      if (cell == grid_.end()) continue;
+      for (const int place : cell->second) f(place);
+    }
+  }
+}
+
+bool PlaceMap::covers(const Pose2& pose, double spacing_m, const std::vector<Pose2>& estimates) const {
+  bool covered = false;
+  forEachFiledNear(pose.translation(), spacing_m, [&](int place) {
+    const Pose2& kept = estimates[static_cast<size_t>(places_[static_cast<size_t>(place)].frame)];
+    const double heading = std::abs(std::remainder(kept.theta - pose.theta, 2.0 * M_PI));
+    if ((kept.translation() - pose.translation()).norm() + reach_m_ * heading < spacing_m) covered = true;
+  });
+  return covered;
+}
+
+void PlaceMap::add(int frame, const GroundFeatures& features, BowVector bow, const std::vector<Pose2>& estimates) {
+  Place place;
+  place.frame = frame;
+  place.points.reserve(features.size());
+  for (const Eigen::Vector2d& p : features.points) place.points.push_back(p.cast<float>());
+  place.descriptors = features.descriptors.clone();  // its own compact buffer, not a view into a larger one
+  place.bow = std::move(bow);
+  database_.add(frame, place.bow);
+  bytes_ += place.bytes();
+  const int index = static_cast<int>(places_.size());
+  index_of_frame_[frame] = index;
+  grid_[cellOf(estimates[static_cast<size_t>(frame)].translation())].push_back(index);
+  places_.push_back(std::move(place));
+}
+
+std::vector<int> PlaceMap::framesNear(const Eigen::Vector2d& where, double radius_m,
+                                      const std::vector<Pose2>& estimates) const {
+  std::vector<std::pair<double, int>> near;  // (distance, frame)
+  forEachFiledNear(where, radius_m, [&](int place) {
+    const int frame = places_[static_cast<size_t>(place)].frame;
+    const double distance = (estimates[static_cast<size_t>(frame)].translation() - where).norm();
+    if (distance <= radius_m) near.emplace_back(distance, frame);
+  });
+  std::sort(near.begin(), near.end());
+  std::vector<int> frames;
+  frames.reserve(near.size());
+  for (const auto& [distance, frame] : near) frames.push_back(frame);
+  return frames;
+}
+
+const Place* PlaceMap::find(int frame) const {
+  const auto found = index_of_frame_.find(frame);
+  return found == index_of_frame_.end() ? nullptr : &places_[static_cast<size_t>(found->second)];
+}
+
+void PlaceMap::reindex(const std::vector<Pose2>& estimates) {
+  grid_.clear();
+  for (size_t i = 0; i < places_.size(); ++i) {
+    grid_[cellOf(estimates[static_cast<size_t>(places_[i].frame)].translation())].push_back(static_cast<int>(i));
+  }
+}
+
+}  // namespace groundslam

@@ -1,0 +1,74 @@
+#pragma once
+// The places loop closure can return to. Not every frame is kept: a frame whose footprint a kept place
+// already covers (within `spacing`) adds nothing a loop closure needs, so memory grows with the ground
+// covered, not with time, and a robot driving over the same floor for hours keeps a bounded map. Places sit
+// in a spatial grid (candidates near an estimate cost the same however large the map is) and in the
+// bag-of-words database (the paper's global search).
+
+#include <cstdint>
+#include <unordered_map>
+#include <vector>
+
+#include <Eigen/Core>
+#include <opencv2/core.hpp>
+
+#include "groundslam/bow/BowDatabase.hpp"
+#include "groundslam/bow/Vocabulary.hpp"
+#include "groundslam/core/FeatureExtraction.hpp"
+#include "groundslam/core/Pose2.hpp"
+
+namespace groundslam {
+
+/// A kept frame: its ground features (points as float: 8 bytes instead of 16, still 1e-7 of a footprint)
+/// and bag-of-words vector.
+struct Place {
+  int frame = 0;
+  std::vector<Eigen::Vector2f> points;
+  cv::Mat descriptors;
+  BowVector bow;
+
+  /// The features as the matcher and the fit take them.
+  GroundFeatures features() const;
+  /// Bytes this place holds (points, descriptors, BoW vector and its database postings).
+  size_t bytes() const;
+};
+
+class PlaceMap {
+ public:
+  /// `reach_m`: how far a heading difference moves a footprint's features (angle * reach), so that two
+  /// poses can be compared by one distance.
+  explicit PlaceMap(double reach_m);
+
+  /// True when a place lies within `spacing_m` of `pose` (position distance + reach * heading difference).
+  bool covers(const Pose2& pose, double spacing_m, const std::vector<Pose2>& estimates) const;
+  void add(int frame, const GroundFeatures& features, BowVector bow, const std::vector<Pose2>& estimates);
+
+  /// Frames of the places whose estimated position lies within `radius_m` of `where`, nearest first.
+  /// Cost grows with the places in that disc, not with the map.
+  std::vector<int> framesNear(const Eigen::Vector2d& where, double radius_m, const std::vector<Pose2>& estimates) const;
+  /// The best `max_results` places by bag-of-words score over the whole map, best first.
+  std::vector<BowMatch> query(const BowVector& bow, int max_results) const { return database_.query(bow, max_results); }
+  /// The place kept for `frame`, or null.
+  const Place* find(int frame) const;
+
+  /// Re-files every place under its current estimate (after an optimisation moved the map).
+  void reindex(const std::vector<Pose2>& estimates);
+  int size() const { return static_cast<int>(places_.size()); }
+  size_t bytes() const { return bytes_; }
+
+ private:
+  using CellKey = std::uint64_t;
+  CellKey cellOf(const Eigen::Vector2d& position) const;
+  /// Calls f(place index) for every place filed in a cell within `radius_m` (+ the filing margin) of `where`.
+  template <class F>
+  void forEachFiledNear(const Eigen::Vector2d& where, double radius_m, F&& f) const;
+
+  double reach_m_;
+  std::vector<Place> places_;
+  std::unordered_map<int, int> index_of_frame_;
+  std::unordered_map<CellKey, std::vector<int>> grid_;  ///< cell -> places filed there
+  BowDatabase database_;
+  size_t bytes_ = 0;
+};
+
+}  // namespace groundslam
