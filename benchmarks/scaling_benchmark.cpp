@@ -47,6 +47,7 @@ int main(int argc, char** argv) {
   Slam slam(config, std::make_shared<const Vocabulary>(readVocabulary(GROUNDSLAM_DEFAULT_VOCABULARY)));
 
   std::vector<double> ms;
+  std::vector<StageTimes> stages;
   const double rss_start = residentMegabytes();
   double rss_after_first_tenth = rss_start;
   int loops = 0;
@@ -56,15 +57,38 @@ int main(int argc, char** argv) {
     const FrameResult r = slam.process(image, i);
     ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
     loops += r.loop_closures;
+    stages.push_back(r.times);
     if (i + 1 == frames / 10) rss_after_first_tenth = residentMegabytes();
     if ((i + 1) % 500 == 0) std::fprintf(stderr, "%d frames, %.1f MB resident\n", i + 1, residentMegabytes());
   }
   const double rss_end = residentMegabytes();
+  const auto finish_start = std::chrono::steady_clock::now();
+  slam.finish();
+  const double finish_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - finish_start).count();
   const size_t tenth = static_cast<size_t>(frames / 10);
   const double first = median(std::vector<double>(ms.begin(), ms.begin() + static_cast<long>(tenth)));
   const double last = median(std::vector<double>(ms.end() - static_cast<long>(tenth), ms.end()));
   std::printf("frames: %d at %dx%d, loop closures: %d\n", frames, width, height, loops);
   std::printf("median frame time, first 10%%: %.2f ms, last 10%%: %.2f ms, ratio %.2f\n", first, last, last / first);
+  // Where the time goes: mean per stage (optimisation runs every few frames, so a median would hide it).
+  const auto stage_means = [&](size_t from, size_t to) {
+    StageTimes sum;
+    for (size_t i = from; i < to; ++i) {
+      sum.extract_ms += stages[i].extract_ms, sum.match_ms += stages[i].match_ms, sum.fit_ms += stages[i].fit_ms;
+      sum.loop_ms += stages[i].loop_ms, sum.optimise_ms += stages[i].optimise_ms;
+    }
+    const double n = static_cast<double>(to - from);
+    std::printf("extract %.2f, match %.2f, fit %.2f, loop %.2f, optimise %.2f", sum.extract_ms / n, sum.match_ms / n,
+                sum.fit_ms / n, sum.loop_ms / n, sum.optimise_ms / n);
+  };
+  std::printf("mean stage times (ms), first 10%%: ");
+  stage_means(0, tenth);
+  std::printf("; last 10%%: ");
+  stage_means(stages.size() - tenth, stages.size());
+  std::printf("\n");
+  const PlaceMap* places = slam.places();
+  std::printf("places kept: %d of %d frames, %.1f MB of features; final whole-graph optimisation: %.0f ms\n",
+              places ? places->size() : 0, frames, places ? static_cast<double>(places->bytes()) / 1e6 : 0.0, finish_ms);
   std::printf("resident memory: %.1f MB at start, %.1f MB at end; growth after the first 10%%: %.1f KB per frame\n",
               rss_start, rss_end, (rss_end - rss_after_first_tenth) * 1000.0 / (frames - static_cast<int>(tenth)));
   return 0;

@@ -1,6 +1,11 @@
-# One helper so that every target builds with the same strict warnings.
+# One helper so that every target builds with the same strict warnings and instruction set.
+# On x86-64, the POPCNT instruction (every x86-64 CPU since 2008) counts descriptor bits in one
+# instruction; without it GCC calls a software popcount and Hamming matching runs several times slower.
 function(groundslam_set_warnings target)
   target_compile_options(${target} PRIVATE -Wall -Wextra -Wconversion -Wsign-conversion -pedantic -Werror)
+  if(CMAKE_SYSTEM_PROCESSOR MATCHES "x86_64|AMD64")
+    target_compile_options(${target} PRIVATE -mpopcnt)
+  endif()
 endfunction()
 
 # groundslam_add_library(NAME SOURCES a.cpp ... DEPS lib ...)

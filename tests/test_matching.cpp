@@ -1,6 +1,7 @@
 #include <random>
 
 #include <gtest/gtest.h>
+#include <opencv2/features2d.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "groundslam/core/FeatureExtraction.hpp"
@@ -47,6 +48,30 @@ TEST(Matching, RatioTestKeepsDistinctMatchesAndDropsAmbiguousOnes) {
     EXPECT_EQ(correct, static_cast<int>(matches.size())) << method;
     const auto twin_matches = DescriptorMatcher({0.7, "brute_force"}).match(query.row(0), ambiguous_train);
     EXPECT_TRUE(twin_matches.empty());
+  }
+}
+
+TEST(Matching, BruteForceGivesExactlyOpenCvsKnnMatchesAfterTheRatioTest) {
+  // Half the queries are noisy copies of train rows (true matches), half random (mostly rejected).
+  std::mt19937 rng(3);
+  const cv::Mat train = randomDescriptors(400, 11);
+  cv::Mat query = randomDescriptors(150, 12);
+  for (int i = 0; i < 150; ++i) query.push_back(flipBits(train.row(i * 2), 5 + i % 40, rng));
+  std::vector<std::vector<cv::DMatch>> knn;
+  cv::BFMatcher(cv::NORM_HAMMING).knnMatch(query, train, knn, 2);
+  std::vector<Match> expected;
+  for (const auto& pair : knn) {
+    if (pair[0].distance <= 0.7f * pair[1].distance && pair[0].distance < pair[1].distance) {
+      expected.push_back({pair[0].queryIdx, pair[0].trainIdx, static_cast<int>(pair[0].distance)});
+    }
+  }
+  const std::vector<Match> ours = bruteForceMatch(query, train, 0.7);
+  ASSERT_EQ(ours.size(), expected.size());
+  ASSERT_GT(ours.size(), 100u);
+  for (size_t i = 0; i < ours.size(); ++i) {
+    EXPECT_EQ(ours[i].query, expected[i].query);
+    EXPECT_EQ(ours[i].train, expected[i].train);
+    EXPECT_EQ(ours[i].distance, expected[i].distance);
   }
 }
 

