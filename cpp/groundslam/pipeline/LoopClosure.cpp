@@ -28,8 +28,7 @@ LoopCloser::LoopCloser(const LoopClosureSettings& settings, std::shared_ptr<cons
     : settings_(settings),
       vocabulary_(std::move(vocabulary)),
       matching_ratio_(matching.ratio),
-      fitting_(fitting),
-      places_(kFootprintReachM) {
+      fitting_(fitting) {
   fitting_.measure_ambiguity = true;
   fitting_.min_inliers = settings.min_inliers;
 }
@@ -41,12 +40,15 @@ std::vector<LoopCandidate> LoopCloser::process(int frame, const GroundFeatures& 
                                 : 0.0;
   path_length_m_.push_back((path_length_m_.empty() ? 0.0 : path_length_m_.back()) + step);
   std::vector<LoopCandidate> candidates;
+  int accepted = 0;
   for (const BowMatch& match : selectCandidates(frame, bow, estimates)) {
+    // More loop edges of one frame add little to its pose; stopping keeps a revisited place as cheap as new ground.
+    if (accepted >= settings_.max_accepted_per_frame) break;
     const Place& place = *places_.find(match.frame);
     LoopCandidate candidate =
         verify(match.frame, place.features(), frame, features, match.score, priorOf(match.frame, frame, estimates));
     candidate.drift_path_m = driftPathLength(match.frame, frame);
-    if (candidate.accepted()) last_loop_a_ = candidate.frame_a, last_loop_b_ = candidate.frame_b;
+    if (candidate.accepted()) last_loop_a_ = candidate.frame_a, last_loop_b_ = candidate.frame_b, ++accepted;
     candidates.push_back(candidate);
   }
   pending_.push_back({frame, features, std::move(bow)});
@@ -59,8 +61,8 @@ void LoopCloser::admitPlaces(int frame, const std::vector<Pose2>& estimates) {
   // becomes a place unless the map already covers its footprint; then only its pose is kept.
   while (!pending_.empty() && pending_.front().frame <= frame - settings_.database_delay_frames) {
     Pending& entering = pending_.front();
-    const Pose2& pose = estimates[static_cast<size_t>(entering.frame)];
-    if (!places_.covers(pose, settings_.place_spacing_m, estimates)) {
+    const Eigen::Vector2d position = estimates[static_cast<size_t>(entering.frame)].translation();
+    if (!places_.covers(position, settings_.place_spacing_m, estimates)) {
       places_.add(entering.frame, entering.features, std::move(entering.bow), estimates);
     }
     pending_.pop_front();

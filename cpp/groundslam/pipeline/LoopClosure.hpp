@@ -30,9 +30,10 @@ struct LoopClosureSettings {
   int max_candidates = 4;            ///< candidates near the estimate verified per frame, best BoW scores first
   int max_nearby_places = 16;        ///< the nearest places within reach are BoW-scored; the best become candidates
   int max_global_candidates = 1;     ///< further candidates from the whole database (the paper's search)
+  int max_accepted_per_frame = 1;    ///< verification stops once this many candidates of a frame are accepted
   double search_radius_m = 0.25;     ///< frames this close to the estimate (plus the drift allowance) are near
   double max_search_radius_m = 0.5;  ///< cap on that reach; larger drift is left to the global search
-  double place_spacing_m = 0.02;     ///< a frame becomes a place unless one lies this close (+ 0.15 m * heading difference)
+  double place_spacing_m = 0.03;     ///< a frame becomes a place unless one lies this close (positions only)
   double min_bow_score = 0.04;       ///< gate 1
   int min_matches = 30;              ///< gate 2: ratio-test matches between the two frames
   int min_inliers = 25;              ///< gate 3: a loop fit with fewer inliers has failed (unbounded covariance)

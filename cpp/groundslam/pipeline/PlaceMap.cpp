@@ -31,8 +31,6 @@ size_t Place::bytes() const {
          2 * bow_bytes;  // the vector and its postings in the database
 }
 
-PlaceMap::PlaceMap(double reach_m) : reach_m_(reach_m) {}
-
 PlaceMap::CellKey PlaceMap::cellOf(const Eigen::Vector2d& position) const {
   const auto cx = static_cast<std::int64_t>(std::floor(position.x() / kCellSizeM));
   const auto cy = static_cast<std::int64_t>(std::floor(position.y() / kCellSizeM));
@@ -55,12 +53,13 @@ void PlaceMap::forEachFiledNear(const Eigen::Vector2d& where, double radius_m, F
   }
 }
 
-bool PlaceMap::covers(const Pose2& pose, double spacing_m, const std::vector<Pose2>& estimates) const {
+bool PlaceMap::covers(const Eigen::Vector2d& position, double spacing_m, const std::vector<Pose2>& estimates) const {
+  // Position alone: ORB is rotation invariant, and a footprint turned about its centre still shares most of
+  // its ground with the unturned one.
   bool covered = false;
-  forEachFiledNear(pose.translation(), spacing_m, [&](int place) {
+  forEachFiledNear(position, spacing_m, [&](int place) {
     const Pose2& kept = estimates[static_cast<size_t>(places_[static_cast<size_t>(place)].frame)];
-    const double heading = std::abs(std::remainder(kept.theta - pose.theta, 2.0 * M_PI));
-    if ((kept.translation() - pose.translation()).norm() + reach_m_ * heading < spacing_m) covered = true;
+    if ((kept.translation() - position).norm() < spacing_m) covered = true;
   });
   return covered;
 }

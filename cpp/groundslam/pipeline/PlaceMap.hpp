@@ -35,12 +35,8 @@ struct Place {
 
 class PlaceMap {
  public:
-  /// `reach_m`: how far a heading difference moves a footprint's features (angle * reach), so that two
-  /// poses can be compared by one distance.
-  explicit PlaceMap(double reach_m);
-
-  /// True when a place lies within `spacing_m` of `pose` (position distance + reach * heading difference).
-  bool covers(const Pose2& pose, double spacing_m, const std::vector<Pose2>& estimates) const;
+  /// True when a place lies within `spacing_m` of `position`.
+  bool covers(const Eigen::Vector2d& position, double spacing_m, const std::vector<Pose2>& estimates) const;
   void add(int frame, const GroundFeatures& features, BowVector bow, const std::vector<Pose2>& estimates);
 
   /// Frames of the places whose estimated position lies within `radius_m` of `where`, nearest first.
@@ -63,7 +59,6 @@ class PlaceMap {
   template <class F>
   void forEachFiledNear(const Eigen::Vector2d& where, double radius_m, F&& f) const;
 
-  double reach_m_;
   std::vector<Place> places_;
   std::unordered_map<int, int> index_of_frame_;
   std::unordered_map<CellKey, std::vector<int>> grid_;  ///< cell -> places filed there
