@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include "groundslam/eval/TrajectoryMetrics.hpp"
+#include "groundslam/io/VocabularyFile.hpp"
 #include "groundslam/pipeline/Slam.hpp"
 #include "groundslam/sim/Simulator.hpp"
 
@@ -91,4 +92,34 @@ TEST(Slam, GuidedOdometryFollowsTheSameWalk) {
   const TrajectoryMetrics m = evaluateTrajectory(truthOf(simulator), slam.trajectory()).metrics;
   EXPECT_LT(m.translation_mae_cm_per_m, 0.1);
   EXPECT_LT(m.rotation_mae_deg, 0.15);
+}
+
+TEST(Slam, ASecondLapOverTheSameGroundAddsNoPlacesButClosesLoops) {
+  sim::SimulationSettings settings;
+  settings.camera = sim::scaledHdGroundIntrinsics(400, 300);
+  settings.path.kind = sim::PathKind::loop;
+  settings.path.laps = 2;
+  settings.path.frames = 200;
+  settings.photometry.noise_sigma = 2.0;
+  const sim::SequenceSimulator simulator(settings);
+  Slam slam(configFor(settings),
+            std::make_shared<const Vocabulary>(readVocabulary(std::string(GROUNDSLAM_SOURCE_DIR) + "/config/vocabulary/ground.gslmvoc")));
+  const int delay = Config().loop_closure.database_delay_frames;
+  int places_after_first_lap = 0, loops_on_second_lap = 0;
+  for (int i = 0; i < simulator.frameCount(); ++i) {
+    const FrameResult r = slam.process(simulator.renderFrame(i), i);
+    if (i == 100 + delay) places_after_first_lap = slam.places()->size();
+    if (i >= 100) loops_on_second_lap += r.loop_closures;
+  }
+  slam.finish();
+  // 1 cm steps and 3 cm spacing: every third or fourth of the first lap's 100 frames becomes a place
+  // (measured: 25); the second lap drives over them and adds none (a frame or two where the lap's ends meet).
+  EXPECT_GE(places_after_first_lap, 24);
+  EXPECT_LE(places_after_first_lap, 40);
+  EXPECT_LE(slam.places()->size(), places_after_first_lap + 2);
+  // At most one accepted loop closure per frame (loop_closure.max_accepted_per_frame), on most frames.
+  EXPECT_GE(loops_on_second_lap, 70);
+  EXPECT_LE(loops_on_second_lap, 100);
+  const TrajectoryMetrics m = evaluateTrajectory(truthOf(simulator), slam.trajectory()).metrics;
+  EXPECT_LT(m.translation_mae_cm_per_m, 0.3);
 }

@@ -90,3 +90,47 @@ TEST(PoseGraph, InformationFloorsTheStandardDeviation) {
   EXPECT_NEAR(I(0, 0), 1.0 / (1e-6 + 1e-12), 1.0);
   EXPECT_NEAR(I(2, 2), 1.0 / (4e-6 + 1e-12), 1.0);
 }
+
+namespace {
+
+/// A straight 1 m-step chain of `n` poses with exact odometry and a loop edge 2 -> n-2; poses from
+/// `first_wrong` on start displaced. With `loop_first` the loop edge is added before the odometry.
+PoseGraph chain(int n, int first_wrong, bool loop_first) {
+  PoseGraph graph;
+  for (int i = 0; i < n; ++i) graph.addPose(i < first_wrong ? Pose2(i, 0, 0) : Pose2(i + 0.2, 0.1 * (i % 3), 0.05 * i));
+  const GraphEdge loop{2, n - 2, Pose2(n - 4, 0, 0), kInformation, true};
+  if (loop_first) graph.addEdge(loop);
+  for (int i = 0; i + 1 < n; ++i) graph.addEdge({i, i + 1, Pose2(1, 0, 0), kInformation, false});
+  if (!loop_first) graph.addEdge(loop);
+  return graph;
+}
+
+}  // namespace
+
+TEST(PoseGraph, WindowedOptimisationMovesOnlyTheWindowAndReachesItsOptimum) {
+  for (const bool loop_first : {false, true}) {  // edges in pose order (a SLAM run) or not
+    PoseGraph graph = chain(12, 6, loop_first);
+    const std::vector<Pose2> before = graph.poses();
+    EXPECT_TRUE(graph.optimise(6).converged);
+    for (int i = 0; i < 6; ++i) {  // held: bit for bit
+      EXPECT_EQ(graph.poses()[size_t(i)].x, before[size_t(i)].x) << i;
+      EXPECT_EQ(graph.poses()[size_t(i)].y, before[size_t(i)].y) << i;
+      EXPECT_EQ(graph.poses()[size_t(i)].theta, before[size_t(i)].theta) << i;
+    }
+    for (int i = 6; i < 12; ++i) {  // the exact chain continues from the held poses
+      EXPECT_NEAR(graph.poses()[size_t(i)].x, i, 1e-6) << i;
+      EXPECT_NEAR(graph.poses()[size_t(i)].y, 0.0, 1e-6) << i;
+      EXPECT_NEAR(wrapAngle(graph.poses()[size_t(i)].theta), 0.0, 1e-6) << i;
+    }
+  }
+}
+
+TEST(PoseGraph, WindowHoldsTheOldPosesThatTheWholeGraphWouldMove) {
+  // Pose 3 starts displaced: the window (poses 6..) cannot fix it, the whole graph can.
+  PoseGraph graph = chain(12, 12, false);
+  graph.setPose(3, Pose2(3.0, 0.3, 0.0));
+  graph.optimise(6);
+  EXPECT_DOUBLE_EQ(graph.poses()[3].y, 0.3);
+  graph.optimise();
+  EXPECT_NEAR(graph.poses()[3].y, 0.0, 1e-6);
+}

@@ -45,10 +45,10 @@ struct GraphConfig {
   double min_sigma_rad = 0.0005;   ///< floor on an edge's heading standard deviation
   int optimise_every_frames = 10;  ///< after a loop closure, optimise at most this often (and once at the end)
   /// Optimise only the last this many poses, the earlier ones held fixed (0: the whole graph every time).
-  /// The whole graph is optimised at the end and after closing a loop around a longer path than
-  /// full_optimisation_after_m.
+  /// The whole graph is optimised at the end, and when a loop closure corrects the estimate by more than
+  /// full_optimisation_correction_m (drift built up over a long path is spread over all of it).
   int window_frames = 100;
-  double full_optimisation_after_m = 5.0;
+  double full_optimisation_correction_m = 0.01;
   PoseGraphSettings solver;
 };
 
@@ -141,7 +141,7 @@ void visitConfigFields(Config_& c, Visitor&& v) {
   v("graph", "min_sigma_rad", c.graph.min_sigma_rad, kNonNegative);
   v("graph", "optimise_every_frames", c.graph.optimise_every_frames, Range{1, 1e9});
   v("graph", "window_frames", c.graph.window_frames, Range{0, 1e9});
-  v("graph", "full_optimisation_after_m", c.graph.full_optimisation_after_m, kNonNegative);
+  v("graph", "full_optimisation_correction_m", c.graph.full_optimisation_correction_m, kNonNegative);
   v("graph", "loop_loss_scale", c.graph.solver.loop_loss_scale, kPositive);
   v("graph", "max_iterations", c.graph.solver.max_iterations, Range{1, 10000});
 }

@@ -45,9 +45,9 @@ std::vector<LoopCandidate> LoopCloser::process(int frame, const GroundFeatures& 
     // More loop edges of one frame add little to its pose; stopping keeps a revisited place as cheap as new ground.
     if (accepted >= settings_.max_accepted_per_frame) break;
     const Place& place = *places_.find(match.frame);
-    LoopCandidate candidate =
-        verify(match.frame, place.features(), frame, features, match.score, priorOf(match.frame, frame, estimates));
-    candidate.drift_path_m = driftPathLength(match.frame, frame);
+    const TransformPrior prior = priorOf(match.frame, frame, estimates);
+    LoopCandidate candidate = verify(match.frame, place.features(), frame, features, match.score, prior);
+    if (candidate.matches >= 0) candidate.correction_m = (candidate.T_a_b.translation() - prior.T_target_source.translation()).norm();
     if (candidate.accepted()) last_loop_a_ = candidate.frame_a, last_loop_b_ = candidate.frame_b, ++accepted;
     candidates.push_back(candidate);
   }

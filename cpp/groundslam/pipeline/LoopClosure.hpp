@@ -60,7 +60,7 @@ struct LoopCandidate {
   double covariance_score = std::nan("");  ///< NaN when not fitted, +inf when the fit failed
   int inliers = 0;
   double ambiguity = std::nan("");     ///< rival transform's support / the fit's; NaN when not fitted
-  double drift_path_m = 0.0;           ///< path length over which the estimate of T_a_b could have drifted
+  double correction_m = std::nan("");  ///< how far the fitted T_a_b moves b from the map's estimate (when fitted)
   LoopGate rejected_by = LoopGate::none;
   Pose2 T_a_b;                         ///< pose of b's robot in a's robot frame (when fitted)
   Eigen::Matrix3d covariance = Eigen::Matrix3d::Identity();

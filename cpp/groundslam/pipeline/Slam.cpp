@@ -99,7 +99,7 @@ void Slam::closeLoops(const Keyframe& current, FrameResult& result) {
                     informationFrom(candidate.covariance, config_.graph.min_sigma_m, config_.graph.min_sigma_rad), true});
     ++result.loop_closures;
     ++unoptimised_loops_;
-    if (candidate.drift_path_m > config_.graph.full_optimisation_after_m) full_optimisation_due_ = true;
+    if (candidate.correction_m > config_.graph.full_optimisation_correction_m) full_optimisation_due_ = true;
   }
   result.times.loop_ms = timer.lap();
 }

@@ -81,7 +81,7 @@ class Slam {
   std::vector<double> timestamps_;
   std::vector<LoopCandidate> candidates_;
   int unoptimised_loops_ = 0;
-  bool full_optimisation_due_ = false;  ///< a loop around a path longer than graph.full_optimisation_after_m closed
+  bool full_optimisation_due_ = false;  ///< a loop closure corrected the estimate by more than graph.full_optimisation_correction_m
   bool window_solved_ = false;          ///< a windowed optimisation ran since the last full one
   int last_optimised_frame_ = -1000000;
 };
