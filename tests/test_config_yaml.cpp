@@ -1,3 +1,4 @@
+#include <fstream>
 #include <gtest/gtest.h>
 
 #include "TestFiles.hpp"
@@ -113,4 +114,11 @@ TEST(ConfigYaml, ShippedDefaultFileMatchesTheDefaultsInCode) {
   expected.camera = shipped.camera;  // the file shows HD Ground's camera; the rest must be the defaults
   EXPECT_EQ(configToYaml(shipped), configToYaml(expected));
   EXPECT_DOUBLE_EQ(shipped.camera.fx, 2195.70853);
+  // Every key is in the file, written as groundslam writes it (after the file's comment lines).
+  std::ifstream file(std::string(GROUNDSLAM_SOURCE_DIR) + "/config/default.yaml");
+  std::string text, line;
+  while (std::getline(file, line)) {
+    if (line.rfind("#", 0) != 0) text += line + "\n";
+  }
+  EXPECT_EQ(text, configToYaml(shipped));
 }
