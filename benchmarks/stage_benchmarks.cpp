@@ -1,9 +1,15 @@
 // Per-stage costs on simulated 1600x1200 frames (HD Ground's camera). Run: build/benchmarks/stage_benchmarks
+#include <cmath>
+#include <random>
+
 #include <benchmark/benchmark.h>
 
 #include "groundslam/core/FeatureExtraction.hpp"
 #include "groundslam/core/Matching.hpp"
+#include "groundslam/core/PoseGraph.hpp"
 #include "groundslam/core/RigidFit.hpp"
+#include "groundslam/bow/BowDatabase.hpp"
+#include "groundslam/io/VocabularyFile.hpp"
 #include "groundslam/sim/Simulator.hpp"
 
 using namespace groundslam;
@@ -15,6 +21,7 @@ struct HdFrames {
   sim::SimulationSettings settings;
   cv::Mat first, second;
   CameraModel camera{CameraIntrinsics{}, Eigen::Isometry3d::Identity()};
+  Pose2 simulator_truth_a_b;
 
   HdFrames() {
     settings.camera = sim::scaledHdGroundIntrinsics(1600, 1200);
@@ -23,6 +30,7 @@ struct HdFrames {
     first = simulator.renderFrame(0);
     second = simulator.renderFrame(1);
     camera = simulator.camera();
+    simulator_truth_a_b = between(simulator.groundTruth()[0], simulator.groundTruth()[1]);
   }
 };
 
@@ -71,6 +79,73 @@ void BM_RobustFit(benchmark::State& state) {
   state.counters["matches"] = static_cast<double>(matches.size());
 }
 BENCHMARK(BM_RobustFit)->Unit(benchmark::kMillisecond);
+
+void BM_LoopVerificationMatching(benchmark::State& state) {
+  // A loop candidate's guided matching within the default drift window with no drift path:
+  // 0.015 m + 0.15 m * 0.035 rad + 5 mm of keypoint slack.
+  const GroundFeatures a = groundFeatures(frames().first), b = groundFeatures(frames().second);
+  const Pose2 estimate = frames().simulator_truth_a_b;
+  for (auto _ : state) benchmark::DoNotOptimize(matchNearby(b, a, estimate, 0.025, 0.7));
+  state.counters["matches"] = static_cast<double>(matchNearby(b, a, estimate, 0.025, 0.7).size());
+}
+BENCHMARK(BM_LoopVerificationMatching)->Unit(benchmark::kMillisecond);
+
+const Vocabulary& vocabulary() {
+  static const Vocabulary instance = readVocabulary(GROUNDSLAM_DEFAULT_VOCABULARY);
+  return instance;
+}
+
+void BM_BowTransform(benchmark::State& state) {
+  const GroundFeatures a = groundFeatures(frames().first);
+  for (auto _ : state) benchmark::DoNotOptimize(vocabulary().transform(a.descriptors));
+}
+BENCHMARK(BM_BowTransform)->Unit(benchmark::kMillisecond);
+
+void BM_BowQuery(benchmark::State& state) {
+  // A database of `places` frames: the HD frame's descriptors with a tenth of the rows replaced at random,
+  // so that entries share most words with the query, as places of one floor do.
+  const GroundFeatures a = groundFeatures(frames().first);
+  BowDatabase database;
+  cv::RNG rng(7);
+  for (int place = 0; place < state.range(0); ++place) {
+    cv::Mat descriptors = a.descriptors.clone();
+    for (int row = place % 10; row < descriptors.rows; row += 10) rng.fill(descriptors.row(row), cv::RNG::UNIFORM, 0, 256);
+    database.add(place, vocabulary().transform(descriptors));
+  }
+  const BowVector query = vocabulary().transform(a.descriptors);
+  for (auto _ : state) benchmark::DoNotOptimize(database.query(query, 5));
+}
+BENCHMARK(BM_BowQuery)->Arg(500)->Arg(2000)->Unit(benchmark::kMillisecond);
+
+/// A random walk of `n` poses: odometry edges, and a loop edge from every frame to the one 50 earlier.
+PoseGraph walkGraph(int n) {
+  PoseGraph graph;
+  std::mt19937 rng(5);
+  std::normal_distribution<double> noise(0.0, 1e-3);
+  graph.addPose(Pose2());
+  for (int i = 1; i < n; ++i) {
+    const Pose2 step(0.01, 0.0, 0.05 * std::sin(0.01 * i));
+    const Pose2 measured(step.x + noise(rng), step.y + noise(rng), step.theta + noise(rng));
+    graph.addPose(graph.poses().back() * measured);
+    graph.addEdge({i - 1, i, measured, Eigen::Matrix3d::Identity() * 1e6, false});
+    if (i >= 50) graph.addEdge({i - 50, i, between(graph.poses()[size_t(i - 50)], graph.poses().back()), Eigen::Matrix3d::Identity() * 1e6, true});
+  }
+  return graph;
+}
+
+void BM_GraphOptimisation(benchmark::State& state) {
+  // Whole graph of `n` poses against the default window of its last 100 (graph.window_frames).
+  const int n = static_cast<int>(state.range(0));
+  const bool window = state.range(1) != 0;
+  const PoseGraph original = walkGraph(n);
+  for (auto _ : state) {
+    state.PauseTiming();
+    PoseGraph graph = original;
+    state.ResumeTiming();
+    benchmark::DoNotOptimize(graph.optimise(window ? n - 100 : 0));
+  }
+}
+BENCHMARK(BM_GraphOptimisation)->Args({1000, 0})->Args({5000, 0})->Args({1000, 1})->Args({5000, 1})->Unit(benchmark::kMillisecond);
 
 }  // namespace
 
