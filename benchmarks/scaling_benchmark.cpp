@@ -2,6 +2,7 @@
 // not timed), runs the full pipeline, and prints the median frame time of the first and last 10% of frames
 // and the memory kept per frame. Usage: scaling_benchmark [FRAMES=5000] [WIDTHxHEIGHT=320x240]
 #include <algorithm>
+#include <cmath>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -100,6 +101,23 @@ int main(int argc, char** argv) {
   stage_means(0, tenth);
   std::printf("; last 10%%: ");
   stage_means(stages.size() - tenth, stages.size());
+  std::printf("\n");
+  // How much loop-closure verification each part of the run did, by outcome.
+  const auto verified = [&](int from, int to) {
+    int fitted = 0, matched_only = 0, cheap = 0;
+    for (const LoopCandidate& c : slam.loopCandidates()) {
+      if (c.frame_b < from || c.frame_b >= to) continue;
+      if (!std::isnan(c.covariance_score)) ++fitted;
+      else if (c.matches > 0) ++matched_only;
+      else ++cheap;
+    }
+    const double n = to - from;
+    std::printf("%.2f fitted, %.2f matched only, %.2f rejected before matching", fitted / n, matched_only / n, cheap / n);
+  };
+  std::printf("candidates per frame, first 10%%: ");
+  verified(0, static_cast<int>(tenth));
+  std::printf("; last 10%%: ");
+  verified(frames - static_cast<int>(tenth), frames);
   std::printf("\n");
   const PlaceMap* places = slam.places();
   std::printf("places kept: %d of %d frames, %.1f MB of features; final whole-graph optimisation: %.0f ms\n",

@@ -65,35 +65,54 @@ std::vector<Match> DescriptorMatcher::match(const cv::Mat& query, const cv::Mat&
 
 namespace {
 
-/// Train features bucketed in square cells of the search radius: a query looks at its 3x3 cells.
+/// Train features bucketed in square cells of the search radius over their bounding box (a dense array of
+/// cells, filled by counting sort): a query looks at its 3x3 cells.
 class PointGrid {
  public:
   PointGrid(const std::vector<Eigen::Vector2d>& points, double cell_m) : cell_m_(cell_m) {
-    for (size_t i = 0; i < points.size(); ++i) cells_[key(points[i])].push_back(static_cast<int>(i));
+    if (points.empty()) return;
+    origin_ = points.front();
+    Eigen::Vector2d hi = points.front();
+    for (const Eigen::Vector2d& p : points) origin_ = origin_.cwiseMin(p), hi = hi.cwiseMax(p);
+    // Cells beyond a 4096 x 4096 array would mean a radius far below the footprint: clamp their count.
+    width_ = std::min(4096L, static_cast<long>((hi.x() - origin_.x()) / cell_m_) + 1);
+    height_ = std::min(4096L, static_cast<long>((hi.y() - origin_.y()) / cell_m_) + 1);
+    start_.assign(static_cast<size_t>(width_ * height_ + 1), 0);
+    std::vector<long> cell_of(points.size());
+    for (size_t i = 0; i < points.size(); ++i) {
+      cell_of[i] = cellIndex(points[i]);
+      ++start_[static_cast<size_t>(cell_of[i]) + 1];
+    }
+    for (size_t c = 1; c < start_.size(); ++c) start_[c] += start_[c - 1];
+    indices_.resize(points.size());
+    std::vector<int> next(start_.begin(), start_.end() - 1);
+    for (size_t i = 0; i < points.size(); ++i) indices_[static_cast<size_t>(next[static_cast<size_t>(cell_of[i])]++)] = static_cast<int>(i);
   }
   template <class Visit>
   void forEachNear(const Eigen::Vector2d& p, Visit&& visit) const {
-    const auto [cx, cy] = cellOf(p);
-    for (long dx = -1; dx <= 1; ++dx) {
-      for (long dy = -1; dy <= 1; ++dy) {
-        const auto it = cells_.find(pack(cx + dx, cy + dy));
-        if (it == cells_.end()) continue;
-        for (int index : it->second) visit(index);
+    if (indices_.empty()) return;
+    const double fx = std::floor((p.x() - origin_.x()) / cell_m_), fy = std::floor((p.y() - origin_.y()) / cell_m_);
+    if (fx < -1.0 || fy < -1.0 || fx > static_cast<double>(width_) || fy > static_cast<double>(height_)) return;
+    const long cx = static_cast<long>(fx), cy = static_cast<long>(fy);
+    for (long y = std::max(0L, cy - 1); y <= std::min(height_ - 1, cy + 1); ++y) {
+      for (long x = std::max(0L, cx - 1); x <= std::min(width_ - 1, cx + 1); ++x) {
+        const auto cell = static_cast<size_t>(y * width_ + x);
+        for (int k = start_[cell]; k < start_[cell + 1]; ++k) visit(indices_[static_cast<size_t>(k)]);
       }
     }
   }
 
  private:
-  std::pair<long, long> cellOf(const Eigen::Vector2d& p) const {
-    return {static_cast<long>(std::floor(p.x() / cell_m_)), static_cast<long>(std::floor(p.y() / cell_m_))};
-  }
-  static long long pack(long x, long y) { return (static_cast<long long>(x) << 32) ^ (static_cast<long long>(y) & 0xffffffffLL); }
-  long long key(const Eigen::Vector2d& p) const {
-    const auto [x, y] = cellOf(p);
-    return pack(x, y);
+  long cellIndex(const Eigen::Vector2d& p) const {
+    const long x = std::min(width_ - 1, static_cast<long>((p.x() - origin_.x()) / cell_m_));
+    const long y = std::min(height_ - 1, static_cast<long>((p.y() - origin_.y()) / cell_m_));
+    return y * width_ + x;
   }
   double cell_m_;
-  std::unordered_map<long long, std::vector<int>> cells_;
+  Eigen::Vector2d origin_ = Eigen::Vector2d::Zero();
+  long width_ = 0, height_ = 0;
+  std::vector<int> start_;    ///< cell c holds indices_[start_[c] .. start_[c + 1])
+  std::vector<int> indices_;  ///< point indices ordered by cell
 };
 
 }  // namespace

@@ -125,6 +125,7 @@ void visitConfigFields(Config_& c, Visitor&& v) {
   v("loop_closure", "max_nearby_places", c.loop_closure.max_nearby_places, Range{0, 100000});
   v("loop_closure", "max_global_candidates", c.loop_closure.max_global_candidates, Range{0, 1000});
   v("loop_closure", "max_accepted_per_frame", c.loop_closure.max_accepted_per_frame, Range{1, 1000});
+  v("loop_closure", "loop_spacing_m", c.loop_closure.loop_spacing_m, kNonNegative);
   v("loop_closure", "search_radius_m", c.loop_closure.search_radius_m, kNonNegative);
   v("loop_closure", "max_search_radius_m", c.loop_closure.max_search_radius_m, kNonNegative);
   v("loop_closure", "place_spacing_m", c.loop_closure.place_spacing_m, kNonNegative);

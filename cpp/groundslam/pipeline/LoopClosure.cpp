@@ -10,6 +10,22 @@ namespace {
 constexpr double kFootprintReachM = 0.15;  // a heading error moves features this far from the centre by angle * reach
 constexpr double kMatchSlackM = 0.005;     // keypoint noise and the rocking mount
 
+/// How many of b's features the estimate T_a_b puts inside the bounding box of a's features grown by `margin_m`.
+int featuresLandingOn(const GroundFeatures& a, const GroundFeatures& b, const Pose2& T_a_b, double margin_m) {
+  if (a.size() == 0) return 0;
+  Eigen::Vector2d lo = a.points.front(), hi = a.points.front();
+  for (const Eigen::Vector2d& p : a.points) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
+  lo.array() -= margin_m;
+  hi.array() += margin_m;
+  const double c = std::cos(T_a_b.theta), s = std::sin(T_a_b.theta);
+  int landing = 0;
+  for (const Eigen::Vector2d& p : b.points) {
+    const double x = c * p.x() - s * p.y() + T_a_b.x, y = s * p.x() + c * p.y() + T_a_b.y;
+    if (x >= lo.x() && x <= hi.x() && y >= lo.y() && y <= hi.y()) ++landing;
+  }
+  return landing;
+}
+
 }  // namespace
 
 const char* loopGateName(LoopGate gate) {
@@ -41,7 +57,11 @@ std::vector<LoopCandidate> LoopCloser::process(int frame, const GroundFeatures& 
   path_length_m_.push_back((path_length_m_.empty() ? 0.0 : path_length_m_.back()) + step);
   std::vector<LoopCandidate> candidates;
   int accepted = 0;
-  for (const BowMatch& match : selectCandidates(frame, bow, estimates)) {
+  // Loop closures a few millimetres apart constrain the same thing: the search waits until the robot has
+  // driven loop_spacing_m since the last one, so a revisited place costs about what new ground costs.
+  const bool searching = last_loop_b_ < 0 || path_length_m_.back() - path_length_m_[static_cast<size_t>(last_loop_b_)] >=
+                                                  settings_.loop_spacing_m;
+  for (const BowMatch& match : searching ? selectCandidates(frame, bow, estimates) : std::vector<BowMatch>{}) {
     // More loop edges of one frame add little to its pose; stopping keeps a revisited place as cheap as new ground.
     if (accepted >= settings_.max_accepted_per_frame) break;
     const Place& place = *places_.find(match.frame);
@@ -128,6 +148,13 @@ LoopCandidate LoopCloser::verify(int frame_a, const GroundFeatures& a, int frame
   // Gate 2: keypoint matches (paper §III-B1 matching), guided by the map's estimate of T_a_b: only features
   // that the estimate, within its drift allowance, puts near each other are compared.
   const double search_m = prior.radius_m + kFootprintReachM * prior.radius_rad + kMatchSlackM;
+  // Before comparing any descriptors: if fewer of b's features than the gate needs can land on a's
+  // footprint at all, the footprints do not overlap enough (a microsecond, where matching takes milliseconds).
+  if (featuresLandingOn(a, b, prior.T_target_source, search_m) < settings_.min_matches) {
+    candidate.matches = 0;
+    candidate.rejected_by = LoopGate::matches;
+    return candidate;
+  }
   const std::vector<Match> matches = matchNearby(b, a, prior.T_target_source, search_m, matching_ratio_);
   candidate.matches = static_cast<int>(matches.size());
   if (candidate.matches < settings_.min_matches) {

@@ -31,6 +31,7 @@ struct LoopClosureSettings {
   int max_nearby_places = 16;        ///< the nearest places within reach are BoW-scored; the best become candidates
   int max_global_candidates = 1;     ///< further candidates from the whole database (the paper's search)
   int max_accepted_per_frame = 1;    ///< verification stops once this many candidates of a frame are accepted
+  double loop_spacing_m = 0.03;      ///< after an accepted loop closure, the search rests until the robot drove this far
   double search_radius_m = 0.25;     ///< frames this close to the estimate (plus the drift allowance) are near
   double max_search_radius_m = 0.5;  ///< cap on that reach; larger drift is left to the global search
   double place_spacing_m = 0.03;     ///< a frame becomes a place unless one lies this close (positions only)
