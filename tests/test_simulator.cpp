@@ -141,3 +141,29 @@ TEST(Textures, KindsDifferAndWetGroundLooksDifferent) {
   const cv::Mat wet = sim::wetAlbedo(kinds[0], 0.0003, 7);
   EXPECT_LT(cv::mean(wet)[0], 0.8 * cv::mean(kinds[0])[0]);
 }
+
+TEST(Simulator, FirstFrameIsMotionBlurredLikeTheRest) {
+  // Sharpness (variance of the Laplacian) of frames 0, 1 and 2 of a blurred sequence: frame 0 must not be
+  // the sharp one (it was, and odometry could not match it to the blurred frame 1).
+  sim::SimulationSettings settings;
+  settings.path.frames = 3;
+  settings.motion_blur = 0.5;
+  settings.photometry.noise_sigma = 0.0;
+  const sim::SequenceSimulator simulator(settings);
+  const auto sharpness = [&](int i) {
+    cv::Mat laplacian;
+    cv::Laplacian(simulator.renderFrame(i), laplacian, CV_64F);
+    cv::Scalar mean, stddev;
+    cv::meanStdDev(laplacian, mean, stddev);
+    return stddev[0] * stddev[0];
+  };
+  const double s0 = sharpness(0), s1 = sharpness(1), s2 = sharpness(2);
+  EXPECT_NEAR(s0 / s1, 1.0, 0.1);
+  EXPECT_NEAR(s2 / s1, 1.0, 0.1);
+  settings.motion_blur = 0.0;
+  cv::Mat sharp_laplacian;
+  cv::Laplacian(sim::SequenceSimulator(settings).renderFrame(0), sharp_laplacian, CV_64F);
+  cv::Scalar mean, stddev;
+  cv::meanStdDev(sharp_laplacian, mean, stddev);
+  EXPECT_GT(stddev[0] * stddev[0], 1.2 * s0);  // and blur does lower it
+}

@@ -104,9 +104,11 @@ cv::Mat SequenceSimulator::renderFrame(int index) const {
   const Pose2& pose = poses_[static_cast<size_t>(index)];
   const Eigen::Isometry3d mount = mountAt(index);
   cv::Mat radiance;
-  if (settings_.motion_blur > 0.0 && index > 0) {
-    // Average renders over the exposure, centred on this frame's pose: cameras stamp mid-exposure.
-    const Pose2 motion = between(poses_[static_cast<size_t>(index) - 1], pose);
+  if (settings_.motion_blur > 0.0 && frameCount() > 1) {
+    // Average renders over the exposure, centred on this frame's pose: cameras stamp mid-exposure. The
+    // first frame is blurred by the motion towards the second: a moving camera's first image is not sharp.
+    const size_t i = static_cast<size_t>(index);
+    const Pose2 motion = index > 0 ? between(poses_[i - 1], pose) : between(pose, poses_[i + 1]);
     const double blur_px = settings_.motion_blur * motion.translation().norm() / camera_.groundSampleDistance();
     const int samples = std::clamp(static_cast<int>(std::ceil(blur_px)) + 1, 2, 12);
     radiance = cv::Mat::zeros(settings_.camera.height, settings_.camera.width, CV_32F);
