@@ -73,13 +73,13 @@ TEST(EndToEnd, LoopClosureBeatsOdometryOnALoopDrivenTwice) {
   ASSERT_EQ(runCli("run " + list + " --no-loop-closure --out " + (dir / "odometry").string()), 0);
   const std::string slam = readTextFile((dir / "slam" / "metrics.json").string());
   const std::string odometry = readTextFile((dir / "odometry" / "metrics.json").string());
-  // Measured: SLAM 0.076 cm/m and 0.049 deg against odometry 0.083 cm/m and 0.045 deg: on this short,
-  // gently rocking sequence odometry is already near the floor that the 0.3 degree rocking of the mount
-  // puts under every pose, so loop closure gains in position and holds the heading.
-  EXPECT_LT(jsonNumber(slam, "rotation_mae_deg"), jsonNumber(odometry, "rotation_mae_deg") + 0.01);
+  // Measured: SLAM 0.077 cm/m and 0.030 deg against odometry 0.084 cm/m and 0.047 deg (38 loop closures,
+  // one per 3 cm of the second lap at most). On this short, gently rocking sequence odometry is already near
+  // the floor that the 0.3 degree rocking of the mount puts under every pose.
+  EXPECT_LT(jsonNumber(slam, "rotation_mae_deg"), jsonNumber(odometry, "rotation_mae_deg"));
   EXPECT_LT(jsonNumber(slam, "translation_mae_cm_per_m"), jsonNumber(odometry, "translation_mae_cm_per_m"));
   EXPECT_LT(jsonNumber(slam, "translation_mae_cm_per_m"), 0.3);
-  EXPECT_LT(jsonNumber(slam, "rotation_mae_deg"), 0.06);
+  EXPECT_LT(jsonNumber(slam, "rotation_mae_deg"), 0.045);
   EXPECT_GT(jsonNumber(slam, "accepted"), 25);  // one per 3 cm of revisited path at most (measured: 38)
   EXPECT_EQ(jsonNumber(slam, "wrong_accepted"), 0);
   EXPECT_DOUBLE_EQ(jsonNumber(slam, "precision"), 1.0);
