@@ -53,7 +53,8 @@ std::vector<FrameResult> processAll(const Dataset& dataset, const Config& config
     PreparedFrame frame;
   };
   constexpr size_t kPrefetch = 2;  // frames in preparation, one preparer each
-  std::vector<FramePreparer> preparers(kPrefetch, FramePreparer(config));
+  std::vector<FramePreparer> preparers;  // built one by one: copies would share one OpenCV ORB object
+  for (size_t j = 0; j < kPrefetch; ++j) preparers.emplace_back(config);
   auto prepare = [&](size_t i) {
     const auto start = std::chrono::steady_clock::now();
     const DatasetFrame& frame = dataset.frames[i];

@@ -43,6 +43,10 @@ double median(std::vector<double> v) {
 
 int main(int argc, char** argv) {
   const int frames = argc > 1 ? std::atoi(argv[1]) : 5000;
+  if (frames < 20) {
+    std::fprintf(stderr, "scaling_benchmark: FRAMES must be at least 20 (got '%s')\n", argc > 1 ? argv[1] : "");
+    return 2;
+  }
   int width = 320, height = 240;
   if (argc > 2) std::sscanf(argv[2], "%dx%d", &width, &height);
   sim::SimulationSettings settings;

@@ -54,9 +54,19 @@ TEST(Matching, RatioTestKeepsDistinctMatchesAndDropsAmbiguousOnes) {
 TEST(Matching, BruteForceGivesExactlyOpenCvsKnnMatchesAfterTheRatioTest) {
   // Half the queries are noisy copies of train rows (true matches), half random (mostly rejected).
   std::mt19937 rng(3);
-  const cv::Mat train = randomDescriptors(400, 11);
+  cv::Mat train = randomDescriptors(400, 11);
   cv::Mat query = randomDescriptors(150, 12);
   for (int i = 0; i < 150; ++i) query.push_back(flipBits(train.row(i * 2), 5 + i % 40, rng));
+  // A borderline pair: nearest at 63 bits, second at 90. 63 <= 0.7f * 90 holds in float (as OpenCV's
+  // distances are), not in double.
+  const auto withBits = [](int bits) {
+    cv::Mat row(1, 32, CV_8U, cv::Scalar(0));
+    for (int b = 0; b < bits; ++b) row.at<unsigned char>(0, b / 8) |= static_cast<unsigned char>(1 << (b % 8));
+    return row;
+  };
+  query.push_back(withBits(0));
+  withBits(63).copyTo(train.row(1));
+  withBits(90).copyTo(train.row(3));
   std::vector<std::vector<cv::DMatch>> knn;
   cv::BFMatcher(cv::NORM_HAMMING).knnMatch(query, train, knn, 2);
   std::vector<Match> expected;
@@ -68,6 +78,8 @@ TEST(Matching, BruteForceGivesExactlyOpenCvsKnnMatchesAfterTheRatioTest) {
   const std::vector<Match> ours = bruteForceMatch(query, train, 0.7);
   ASSERT_EQ(ours.size(), expected.size());
   ASSERT_GT(ours.size(), 100u);
+  EXPECT_EQ(ours.back().query, 300);  // the borderline pair is kept
+  EXPECT_EQ(ours.back().distance, 63);
   for (size_t i = 0; i < ours.size(); ++i) {
     EXPECT_EQ(ours[i].query, expected[i].query);
     EXPECT_EQ(ours[i].train, expected[i].train);

@@ -67,11 +67,15 @@ TEST(PlaceMap, KeepsFeaturesToFloatPrecisionAndAnswersTheGlobalQuery) {
   EXPECT_DOUBLE_EQ(best[0].score, 1.0);
 }
 
-TEST(PlaceMap, ReindexFindsPlacesWhereTheOptimisedMapPutsThem) {
+TEST(PlaceMap, RefilingFindsPlacesWhereTheOptimisedMapPutsThem) {
   std::vector<Pose2> estimates = lineDrivenTwice(0.0);
   PlaceMap map = mapOf(estimates, 0.025);
   estimates = lineDrivenTwice(1.0);  // a correction moved the whole map by a metre
   EXPECT_EQ(map.framesNear({0.5, 1.0}, 0.045, estimates), std::vector<int>{});  // still filed at y = 0
-  map.reindex(estimates);
+  map.refile(estimates, 50);  // a window from frame 50 on moved
+  EXPECT_EQ(map.framesNear({0.5, 1.0}, 0.045, estimates), (std::vector<int>{51, 54}));
+  EXPECT_EQ(map.framesNear({0.2, 1.0}, 0.045, estimates), std::vector<int>{});  // frame 21 was not re-filed
+  map.refile(estimates, 0);  // the whole map moved
   EXPECT_EQ(map.framesNear({0.5, 1.0}, 0.045, estimates), (std::vector<int>{51, 48, 54}));
+  EXPECT_EQ(map.framesNear({0.2, 1.0}, 0.045, estimates), (std::vector<int>{21, 18, 24}));
 }

@@ -19,7 +19,8 @@ class BowDatabase {
  public:
   void add(int frame, const BowVector& bow);
   /// The best `max_results` frames by score, best first. Cost grows with the postings of the
-  /// query's words, not with the frames that share none of them.
+  /// query's words, not with the frames that share none of them. It reuses scratch arrays of the
+  /// database: one query at a time per database.
   std::vector<BowMatch> query(const BowVector& bow, int max_results) const;
   int size() const { return static_cast<int>(frames_.size()); }
 

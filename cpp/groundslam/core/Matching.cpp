@@ -29,8 +29,10 @@ std::vector<Match> bruteForceMatch(const cv::Mat& query, const cv::Mat& train, d
       }
     }
     second_distance = std::min(second_distance, 256);  // a lone train descriptor has no close rival
-    // Lowe's ratio test (paper eq. 5); best < second also rejects two equally good candidates.
-    if (best >= 0 && best_distance <= ratio * second_distance && best_distance < second_distance) {
+    // Lowe's ratio test (paper eq. 5) in float, as on OpenCV's DMatch distances (63 <= 0.7f * 90 holds in
+    // float, not in double); best < second also rejects two equally good candidates.
+    const float f0 = static_cast<float>(best_distance), f1 = static_cast<float>(second_distance);
+    if (best >= 0 && f0 <= static_cast<float>(ratio) * f1 && f0 < f1) {
       matches.push_back({q, best, best_distance});
     }
   }
@@ -74,9 +76,11 @@ class PointGrid {
     origin_ = points.front();
     Eigen::Vector2d hi = points.front();
     for (const Eigen::Vector2d& p : points) origin_ = origin_.cwiseMin(p), hi = hi.cwiseMax(p);
-    // Cells beyond a 4096 x 4096 array would mean a radius far below the footprint: clamp their count.
-    width_ = std::min(4096L, static_cast<long>((hi.x() - origin_.x()) / cell_m_) + 1);
-    height_ = std::min(4096L, static_cast<long>((hi.y() - origin_.y()) / cell_m_) + 1);
+    // At most 1024 cells a side: a radius far below the footprint gets wider cells (still >= the radius, so
+    // the 3x3 cells around a query cover it).
+    cell_m_ = std::max({cell_m_, (hi.x() - origin_.x()) / 1000.0, (hi.y() - origin_.y()) / 1000.0, 1e-12});
+    width_ = static_cast<long>((hi.x() - origin_.x()) / cell_m_) + 1;
+    height_ = static_cast<long>((hi.y() - origin_.y()) / cell_m_) + 1;
     start_.assign(static_cast<size_t>(width_ * height_ + 1), 0);
     std::vector<long> cell_of(points.size());
     for (size_t i = 0; i < points.size(); ++i) {

@@ -127,7 +127,7 @@ void visitConfigFields(Config_& c, Visitor&& v) {
   v("loop_closure", "max_accepted_per_frame", c.loop_closure.max_accepted_per_frame, Range{1, 1000});
   v("loop_closure", "loop_spacing_m", c.loop_closure.loop_spacing_m, kNonNegative);
   v("loop_closure", "search_radius_m", c.loop_closure.search_radius_m, kNonNegative);
-  v("loop_closure", "max_search_radius_m", c.loop_closure.max_search_radius_m, kNonNegative);
+  v("loop_closure", "max_search_radius_m", c.loop_closure.max_search_radius_m, Range{0.0, 10.0});
   v("loop_closure", "place_spacing_m", c.loop_closure.place_spacing_m, kNonNegative);
   v("loop_closure", "min_bow_score", c.loop_closure.min_bow_score, Range{0.0, 1.0});
   v("loop_closure", "min_matches", c.loop_closure.min_matches, Range{3, 1e9});

@@ -67,7 +67,7 @@ std::vector<LoopCandidate> LoopCloser::process(int frame, const GroundFeatures& 
     const Place& place = *places_.find(match.frame);
     const TransformPrior prior = priorOf(match.frame, frame, estimates);
     LoopCandidate candidate = verify(match.frame, place.features(), frame, features, match.score, prior);
-    if (candidate.matches >= 0) candidate.correction_m = (candidate.T_a_b.translation() - prior.T_target_source.translation()).norm();
+    if (!std::isnan(candidate.covariance_score)) candidate.correction_m = (candidate.T_a_b.translation() - prior.T_target_source.translation()).norm();
     if (candidate.accepted()) last_loop_a_ = candidate.frame_a, last_loop_b_ = candidate.frame_b, ++accepted;
     candidates.push_back(candidate);
   }

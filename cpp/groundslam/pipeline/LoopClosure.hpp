@@ -76,8 +76,9 @@ class LoopCloser {
   /// Verifies frame `frame`'s candidates against the database, then lets frame - k into it. `estimates`
   /// holds the current pose estimate of every frame up to this one. Returns every candidate verified.
   std::vector<LoopCandidate> process(int frame, const GroundFeatures& features, const std::vector<Pose2>& estimates);
-  /// Re-files the places under their current estimates, after an optimisation moved the whole map.
-  void mapMoved(const std::vector<Pose2>& estimates) { places_.reindex(estimates); }
+  /// Re-files the places of frames from `first_moved` on under their current estimates, after an
+  /// optimisation moved them.
+  void mapMoved(const std::vector<Pose2>& estimates, int first_moved) { places_.refile(estimates, first_moved); }
   const PlaceMap& places() const { return places_; }
 
  private:

@@ -7,9 +7,6 @@ namespace groundslam {
 namespace {
 
 constexpr double kCellSizeM = 0.25;
-/// Places are filed under the estimate they had when filed; windowed optimisations move them by far less
-/// than this before the next reindex, so searching this much wider finds them all.
-constexpr double kFilingMarginM = 0.05;
 
 std::uint64_t cellKey(std::int64_t cx, std::int64_t cy) {
   return (static_cast<std::uint64_t>(cx) << 32) ^ (static_cast<std::uint64_t>(cy) & 0xffffffffu);
@@ -39,7 +36,7 @@ PlaceMap::CellKey PlaceMap::cellOf(const Eigen::Vector2d& position) const {
 
 template <class F>
 void PlaceMap::forEachFiledNear(const Eigen::Vector2d& where, double radius_m, F&& f) const {
-  const double r = radius_m + kFilingMarginM;
+  const double r = radius_m;
   const auto lo_x = static_cast<std::int64_t>(std::floor((where.x() - r) / kCellSizeM));
   const auto hi_x = static_cast<std::int64_t>(std::floor((where.x() + r) / kCellSizeM));
   const auto lo_y = static_cast<std::int64_t>(std::floor((where.y() - r) / kCellSizeM));
@@ -75,7 +72,9 @@ void PlaceMap::add(int frame, const GroundFeatures& features, BowVector bow, con
   bytes_ += place.bytes();
   const int index = static_cast<int>(places_.size());
   index_of_frame_[frame] = index;
-  grid_[cellOf(estimates[static_cast<size_t>(frame)].translation())].push_back(index);
+  const CellKey cell = cellOf(estimates[static_cast<size_t>(frame)].translation());
+  grid_[cell].push_back(index);
+  filed_in_.push_back(cell);
   places_.push_back(std::move(place));
 }
 
@@ -99,10 +98,17 @@ const Place* PlaceMap::find(int frame) const {
   return found == index_of_frame_.end() ? nullptr : &places_[static_cast<size_t>(found->second)];
 }
 
-void PlaceMap::reindex(const std::vector<Pose2>& estimates) {
-  grid_.clear();
-  for (size_t i = 0; i < places_.size(); ++i) {
-    grid_[cellOf(estimates[static_cast<size_t>(places_[i].frame)].translation())].push_back(static_cast<int>(i));
+void PlaceMap::refile(const std::vector<Pose2>& estimates, int first_moved) {
+  // Places are added in frame order: those of frames from first_moved on are a suffix.
+  const auto first = std::partition_point(places_.begin(), places_.end(), [&](const Place& p) { return p.frame < first_moved; });
+  for (auto place = first; place != places_.end(); ++place) {
+    const auto index = static_cast<size_t>(place - places_.begin());
+    const CellKey now = cellOf(estimates[static_cast<size_t>(place->frame)].translation());
+    if (now == filed_in_[index]) continue;
+    std::vector<int>& old_cell = grid_[filed_in_[index]];
+    old_cell.erase(std::find(old_cell.begin(), old_cell.end(), static_cast<int>(index)));
+    grid_[now].push_back(static_cast<int>(index));
+    filed_in_[index] = now;
   }
 }
 

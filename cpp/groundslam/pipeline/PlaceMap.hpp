@@ -47,21 +47,23 @@ class PlaceMap {
   /// The place kept for `frame`, or null.
   const Place* find(int frame) const;
 
-  /// Re-files every place under its current estimate (after an optimisation moved the map).
-  void reindex(const std::vector<Pose2>& estimates);
+  /// Re-files the places of frames from `first_moved` on under their current estimates (after an
+  /// optimisation moved them): cost grows with those places only.
+  void refile(const std::vector<Pose2>& estimates, int first_moved);
   int size() const { return static_cast<int>(places_.size()); }
   size_t bytes() const { return bytes_; }
 
  private:
   using CellKey = std::uint64_t;
   CellKey cellOf(const Eigen::Vector2d& position) const;
-  /// Calls f(place index) for every place filed in a cell within `radius_m` (+ the filing margin) of `where`.
+  /// Calls f(place index) for every place filed in a cell within `radius_m` of `where`.
   template <class F>
   void forEachFiledNear(const Eigen::Vector2d& where, double radius_m, F&& f) const;
 
   std::vector<Place> places_;
   std::unordered_map<int, int> index_of_frame_;
   std::unordered_map<CellKey, std::vector<int>> grid_;  ///< cell -> places filed there
+  std::vector<CellKey> filed_in_;                       ///< place -> its cell
   BowDatabase database_;
   size_t bytes_ = 0;
 };

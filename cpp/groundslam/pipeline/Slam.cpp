@@ -1,5 +1,6 @@
 #include "groundslam/pipeline/Slam.hpp"
 
+#include <algorithm>
 #include <chrono>
 
 namespace groundslam {
@@ -116,8 +117,10 @@ void Slam::optimiseIfDue(FrameResult& result, bool at_end) {
   StageTimer timer;
   const int window = config_.graph.window_frames;
   const bool full = at_end || full_optimisation_due_ || window == 0 || frame < window;
-  graph_.optimise(full ? 0 : frame + 1 - window);  // warm start: the current estimates are the initial values
-  if (full && loop_closer_) loop_closer_->mapMoved(graph_.poses());
+  // The window reaches back to every loop edge added since the last optimisation.
+  const int first_free = full ? 0 : std::min(frame + 1 - window, last_optimised_frame_ + 1);
+  graph_.optimise(std::max(first_free, 0));  // warm start: the current estimates are the initial values
+  if (loop_closer_) loop_closer_->mapMoved(graph_.poses(), std::max(first_free, 0));
   window_solved_ = !full;
   full_optimisation_due_ = false;
   unoptimised_loops_ = 0;
