@@ -9,6 +9,7 @@ namespace {
 
 constexpr double kFootprintReachM = 0.15;  // a heading error moves features this far from the centre by angle * reach
 constexpr double kMatchSlackM = 0.005;     // keypoint noise and the rocking mount
+constexpr size_t kRecentLoops = 16;        // drift is bounded through any of these latest loop closures
 
 /// How many of b's features the estimate T_a_b puts inside the bounding box of a's features grown by `margin_m`.
 int featuresLandingOn(const GroundFeatures& a, const GroundFeatures& b, const Pose2& T_a_b, double margin_m) {
@@ -59,7 +60,8 @@ std::vector<LoopCandidate> LoopCloser::process(int frame, const GroundFeatures& 
   int accepted = 0;
   // Loop closures a few millimetres apart constrain the same thing: the search waits until the robot has
   // driven loop_spacing_m since the last one, so a revisited place costs about what new ground costs.
-  const bool searching = last_loop_b_ < 0 || path_length_m_.back() - path_length_m_[static_cast<size_t>(last_loop_b_)] >=
+  const bool searching = recent_loops_.empty() ||
+                         path_length_m_.back() - path_length_m_[static_cast<size_t>(recent_loops_.back().second)] >=
                                                   settings_.loop_spacing_m;
   for (const BowMatch& match : searching ? selectCandidates(frame, bow, estimates) : std::vector<BowMatch>{}) {
     // More loop edges of one frame add little to its pose; stopping keeps a revisited place as cheap as new ground.
@@ -68,7 +70,11 @@ std::vector<LoopCandidate> LoopCloser::process(int frame, const GroundFeatures& 
     const TransformPrior prior = priorOf(match.frame, frame, estimates);
     LoopCandidate candidate = verify(match.frame, place.features(), frame, features, match.score, prior);
     if (!std::isnan(candidate.covariance_score)) candidate.correction_m = (candidate.T_a_b.translation() - prior.T_target_source.translation()).norm();
-    if (candidate.accepted()) last_loop_a_ = candidate.frame_a, last_loop_b_ = candidate.frame_b, ++accepted;
+    if (candidate.accepted()) {
+      ++accepted;
+      recent_loops_.emplace_back(candidate.frame_a, candidate.frame_b);
+      if (recent_loops_.size() > kRecentLoops) recent_loops_.pop_front();
+    }
     candidates.push_back(candidate);
   }
   pending_.push_back({frame, features, std::move(bow)});
@@ -118,9 +124,9 @@ std::vector<BowMatch> LoopCloser::selectCandidates(int frame, const BowVector& b
 double LoopCloser::driftPathLength(int frame_a, int frame_b) const {
   const auto s = [this](int frame) { return path_length_m_[static_cast<size_t>(frame)]; };
   double length = s(frame_b) - s(frame_a);
-  if (last_loop_b_ >= 0) {
-    // Through the last loop closure: a -> last a, the closed loop (no drift), last b -> b.
-    length = std::min(length, std::abs(s(frame_a) - s(last_loop_a_)) + std::abs(s(frame_b) - s(last_loop_b_)));
+  for (const auto& [loop_a, loop_b] : recent_loops_) {
+    // Through a recent loop closure: a -> its a, the closed loop (no drift), its b -> b.
+    length = std::min(length, std::abs(s(frame_a) - s(loop_a)) + std::abs(s(frame_b) - s(loop_b)));
   }
   return length;
 }

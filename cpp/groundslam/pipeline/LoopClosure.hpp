@@ -41,7 +41,7 @@ struct LoopClosureSettings {
   double max_covariance_score = -4.0;  ///< gate 3: log10 of the largest eigenvalue of the fit's covariance
   double max_ambiguity = 0.8;        ///< also gate 3: rival transform's support / the fit's (repetitive floors)
   /// A loop transform may disagree with the current estimate of T_a_b by at most base + rate * d, where d
-  /// is the path length over which drift could have built up between a and b (through the last loop closure).
+  /// is the path length over which drift could have built up between a and b (through a recent loop closure).
   double max_disagreement_m = 0.015;
   double max_disagreement_per_m = 0.005;
   double max_disagreement_rad = 0.035;
@@ -94,7 +94,8 @@ class LoopCloser {
                        const TransformPrior& prior) const;
   /// The estimated T_a_b and how far drift since the last correction may have moved it.
   TransformPrior priorOf(int frame_a, int frame_b, const std::vector<Pose2>& estimates) const;
-  /// The path length over which the estimate of T_a_b could have drifted.
+  /// The path length over which the estimate of T_a_b could have drifted: between a and b, or through
+  /// one of the recent loop closures, whichever is shortest.
   double driftPathLength(int frame_a, int frame_b) const;
 
   LoopClosureSettings settings_;
@@ -104,7 +105,7 @@ class LoopCloser {
   PlaceMap places_;
   std::deque<Pending> pending_;        ///< the last k frames, not yet in the map
   std::vector<double> path_length_m_;  ///< estimated distance driven up to each frame
-  int last_loop_a_ = -1, last_loop_b_ = -1;  ///< the latest accepted loop closure
+  std::deque<std::pair<int, int>> recent_loops_;  ///< (frame_a, frame_b) of the latest accepted loop closures
 };
 
 }  // namespace groundslam
