@@ -57,19 +57,32 @@ std::vector<LoopCandidate> LoopCloser::process(int frame, const GroundFeatures& 
                                 : 0.0;
   path_length_m_.push_back((path_length_m_.empty() ? 0.0 : path_length_m_.back()) + step);
   std::vector<LoopCandidate> candidates;
-  int accepted = 0;
-  // Loop closures a few millimetres apart constrain the same thing: the search waits until the robot has
+  if (searchDue()) candidates = verifyCandidates(frame, features, bow, estimates);
+  pending_.push_back({frame, features, std::move(bow)});
+  admitPlaces(frame, estimates);
+  return candidates;
+}
+
+bool LoopCloser::searchDue() const {
+  // Loop closures a few millimetres apart constrain the same thing: the search rests until the robot has
   // driven loop_spacing_m since the last one, so a revisited place costs about what new ground costs.
-  const bool searching = recent_loops_.empty() ||
-                         path_length_m_.back() - path_length_m_[static_cast<size_t>(recent_loops_.back().second)] >=
-                                                  settings_.loop_spacing_m;
-  for (const BowMatch& match : searching ? selectCandidates(frame, bow, estimates) : std::vector<BowMatch>{}) {
-    // More loop edges of one frame add little to its pose; stopping keeps a revisited place as cheap as new ground.
+  if (recent_loops_.empty()) return true;
+  const double since_last = path_length_m_.back() - path_length_m_[static_cast<size_t>(recent_loops_.back().second)];
+  return since_last >= settings_.loop_spacing_m;
+}
+
+std::vector<LoopCandidate> LoopCloser::verifyCandidates(int frame, const GroundFeatures& features, const BowVector& bow,
+                                                        const std::vector<Pose2>& estimates) {
+  std::vector<LoopCandidate> candidates;
+  int accepted = 0;
+  for (const BowMatch& match : selectCandidates(frame, bow, estimates)) {
+    // More loop edges of one frame add little to its pose: verification stops at max_accepted_per_frame.
     if (accepted >= settings_.max_accepted_per_frame) break;
-    const Place& place = *places_.find(match.frame);
     const TransformPrior prior = priorOf(match.frame, frame, estimates);
-    LoopCandidate candidate = verify(match.frame, place.features(), frame, features, match.score, prior);
-    if (!std::isnan(candidate.covariance_score)) candidate.correction_m = (candidate.T_a_b.translation() - prior.T_target_source.translation()).norm();
+    LoopCandidate candidate = verify(match.frame, places_.find(match.frame)->features(), frame, features, match.score, prior);
+    if (!std::isnan(candidate.covariance_score)) {
+      candidate.correction_m = (candidate.T_a_b.translation() - prior.T_target_source.translation()).norm();
+    }
     if (candidate.accepted()) {
       ++accepted;
       recent_loops_.emplace_back(candidate.frame_a, candidate.frame_b);
@@ -77,8 +90,6 @@ std::vector<LoopCandidate> LoopCloser::process(int frame, const GroundFeatures& 
     }
     candidates.push_back(candidate);
   }
-  pending_.push_back({frame, features, std::move(bow)});
-  admitPlaces(frame, estimates);
   return candidates;
 }
 

@@ -88,6 +88,11 @@ class LoopCloser {
     GroundFeatures features;
     BowVector bow;
   };
+  /// False while the search rests after an accepted loop closure (loop_spacing_m).
+  bool searchDue() const;
+  /// Selects this frame's candidates and verifies them, best first, until enough are accepted.
+  std::vector<LoopCandidate> verifyCandidates(int frame, const GroundFeatures& features, const BowVector& bow,
+                                              const std::vector<Pose2>& estimates);
   std::vector<BowMatch> selectCandidates(int frame, const BowVector& bow, const std::vector<Pose2>& estimates) const;
   void admitPlaces(int frame, const std::vector<Pose2>& estimates);
   LoopCandidate verify(int frame_a, const GroundFeatures& a, int frame_b, const GroundFeatures& b, double bow_score,
