@@ -127,11 +127,10 @@ std::vector<Match> matchNearby(const GroundFeatures& query, const GroundFeatures
   if (query.size() == 0 || train.size() == 0) return matches;
   const PointGrid grid(train.points, radius_m);
   const double radius2 = radius_m * radius_m;
-  Eigen::Matrix2d rotation;  // computed once, not per point
-  rotation << std::cos(T_train_query.theta), -std::sin(T_train_query.theta), std::sin(T_train_query.theta),
-      std::cos(T_train_query.theta);
+  const Eigen::Matrix2d R = T_train_query.rotation();  // once, not per point
+  const Eigen::Vector2d t = T_train_query.translation();
   for (size_t q = 0; q < query.size(); ++q) {
-    const Eigen::Vector2d predicted = rotation * query.points[q] + T_train_query.translation();
+    const Eigen::Vector2d predicted = R * query.points[q] + t;
     const std::uint8_t* descriptor = query.descriptors.ptr<std::uint8_t>(static_cast<int>(q));
     int best = -1, best_distance = 257, second_distance = 256;  // a lone candidate has no close rival
     grid.forEachNear(predicted, [&](int t) {

@@ -28,10 +28,12 @@ Pose2 Pose2::operator*(const Pose2& T_b_c) const {
   return Pose2(t.x(), t.y(), theta + T_b_c.theta);
 }
 
-Eigen::Vector2d Pose2::operator*(const Eigen::Vector2d& p_b) const {
+Eigen::Matrix2d Pose2::rotation() const {
   const double c = std::cos(theta), s = std::sin(theta);
-  return {c * p_b.x() - s * p_b.y() + x, s * p_b.x() + c * p_b.y() + y};
+  return (Eigen::Matrix2d() << c, -s, s, c).finished();
 }
+
+Eigen::Vector2d Pose2::operator*(const Eigen::Vector2d& p_b) const { return rotation() * p_b + translation(); }
 
 Pose2 Pose2::inverse() const {
   const double c = std::cos(theta), s = std::sin(theta);

@@ -21,6 +21,8 @@ struct Pose2 {
 
   Eigen::Matrix3d matrix() const;
   Eigen::Vector2d translation() const { return {x, y}; }
+  /// The rotation matrix R(theta): compute it once to transform many points (p_a = R p_b + t).
+  Eigen::Matrix2d rotation() const;
 
   /// T_a_c = T_a_b * T_b_c
   Pose2 operator*(const Pose2& T_b_c) const;

@@ -38,6 +38,9 @@ struct EdgeResidual {
   Eigen::Matrix3d sqrt_information_;
 };
 
+/// The later of an edge's two poses: an edge touches the window [first_free, ...) when this lies in it.
+int lastPoseOf(const GraphEdge& edge) { return std::max(edge.from, edge.to); }
+
 }  // namespace
 
 Eigen::Matrix3d informationFrom(const Eigen::Matrix3d& covariance, double min_sigma_m, double min_sigma_rad) {
@@ -56,8 +59,7 @@ int PoseGraph::addPose(const Pose2& initial_T_world_robot) {
 }
 
 void PoseGraph::addEdge(const GraphEdge& edge) {
-  const auto last_pose = [](const GraphEdge& e) { return std::max(e.from, e.to); };
-  if (!edges_.empty() && last_pose(edge) < last_pose(edges_.back())) edges_in_pose_order_ = false;
+  if (!edges_.empty() && lastPoseOf(edge) < lastPoseOf(edges_.back())) edges_in_pose_order_ = false;
   edges_.push_back(edge);
 }
 
@@ -66,10 +68,9 @@ OptimisationSummary PoseGraph::optimise(int first_free) {
   first_free = std::max(first_free, 0);
   if (poses_.size() < 2 || first_free >= static_cast<int>(poses_.size())) return result;
   // Edges touching the window: with edges in pose order they are a suffix of edges_.
-  const auto last_pose = [](const GraphEdge& e) { return std::max(e.from, e.to); };
   auto first_edge = edges_.begin();
   if (edges_in_pose_order_) {
-    first_edge = std::partition_point(edges_.begin(), edges_.end(), [&](const GraphEdge& e) { return last_pose(e) < first_free; });
+    first_edge = std::partition_point(edges_.begin(), edges_.end(), [&](const GraphEdge& e) { return lastPoseOf(e) < first_free; });
   }
   // Parameter blocks: the window's poses, and the fixed poses outside it that its edges reach.
   std::unordered_map<int, std::array<double, 3>> parameters;
@@ -83,7 +84,7 @@ OptimisationSummary PoseGraph::optimise(int first_free) {
   };
   ceres::Problem problem;
   for (auto edge = first_edge; edge != edges_.end(); ++edge) {
-    if (last_pose(*edge) < first_free) continue;
+    if (lastPoseOf(*edge) < first_free) continue;
     // The upper Cholesky factor U of the information (I = U^T U) whitens the error.
     const Eigen::Matrix3d sqrt_information = edge->information.llt().matrixU();
     auto* cost = new ceres::AutoDiffCostFunction<EdgeResidual, 3, 3, 3>(new EdgeResidual(edge->T_from_to, sqrt_information));

@@ -49,11 +49,10 @@ std::vector<int> inliersOf(const Pose2& T, const std::vector<Eigen::Vector2d>& t
                            const std::vector<Eigen::Vector2d>& source, double threshold) {
   std::vector<int> inliers;
   const double t2 = threshold * threshold;
-  const double c = std::cos(T.theta), s = std::sin(T.theta);  // once, not per point
+  const Eigen::Matrix2d R = T.rotation();  // once, not per point
+  const Eigen::Vector2d t = T.translation();
   for (size_t i = 0; i < target.size(); ++i) {
-    const Eigen::Vector2d& p = source[i];
-    const double dx = c * p.x() - s * p.y() + T.x - target[i].x(), dy = s * p.x() + c * p.y() + T.y - target[i].y();
-    if (dx * dx + dy * dy <= t2) inliers.push_back(static_cast<int>(i));
+    if ((R * source[i] + t - target[i]).squaredNorm() <= t2) inliers.push_back(static_cast<int>(i));
   }
   return inliers;
 }

@@ -1,6 +1,6 @@
 #include "groundslam/pipeline/FramePreparer.hpp"
 
-#include <chrono>
+#include "groundslam/pipeline/StageTimer.hpp"
 
 namespace groundslam {
 
@@ -20,16 +20,13 @@ FramePreparer::FramePreparer(const Config& config)
 
 PreparedFrame FramePreparer::prepare(const cv::Mat& image, double timestamp) const {
   // ORB keypoints and descriptors, projected to metric points on the ground plane (paper eqs. 2-4).
-  using Clock = std::chrono::steady_clock;
-  const auto ms_since = [](Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); };
+  StageTimer timer;
   PreparedFrame prepared;
   prepared.timestamp = timestamp;
-  const auto start = Clock::now();
   const ImageFeatures image_features = extractor_.detect(image);
-  prepared.extract_ms = ms_since(start);
-  const auto projected = Clock::now();
+  prepared.extract_ms = timer.lap();
   prepared.features = dropNearTwins(projectToGround(image_features, camera_), near_twin_max_distance_);
-  prepared.project_ms = ms_since(projected);
+  prepared.project_ms = timer.lap();
   return prepared;
 }
 

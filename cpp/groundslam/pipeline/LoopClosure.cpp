@@ -18,11 +18,12 @@ int featuresLandingOn(const GroundFeatures& a, const GroundFeatures& b, const Po
   for (const Eigen::Vector2d& p : a.points) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
   lo.array() -= margin_m;
   hi.array() += margin_m;
-  const double c = std::cos(T_a_b.theta), s = std::sin(T_a_b.theta);
+  const Eigen::Matrix2d R = T_a_b.rotation();
+  const Eigen::Vector2d t = T_a_b.translation();
   int landing = 0;
   for (const Eigen::Vector2d& p : b.points) {
-    const double x = c * p.x() - s * p.y() + T_a_b.x, y = s * p.x() + c * p.y() + T_a_b.y;
-    if (x >= lo.x() && x <= hi.x() && y >= lo.y() && y <= hi.y()) ++landing;
+    const Eigen::Vector2d q = R * p + t;
+    if (q.x() >= lo.x() && q.x() <= hi.x() && q.y() >= lo.y() && q.y() <= hi.y()) ++landing;
   }
   return landing;
 }

@@ -36,11 +36,10 @@ PlaceMap::CellKey PlaceMap::cellOf(const Eigen::Vector2d& position) const {
 
 template <class F>
 void PlaceMap::forEachFiledNear(const Eigen::Vector2d& where, double radius_m, F&& f) const {
-  const double r = radius_m;
-  const auto lo_x = static_cast<std::int64_t>(std::floor((where.x() - r) / kCellSizeM));
-  const auto hi_x = static_cast<std::int64_t>(std::floor((where.x() + r) / kCellSizeM));
-  const auto lo_y = static_cast<std::int64_t>(std::floor((where.y() - r) / kCellSizeM));
-  const auto hi_y = static_cast<std::int64_t>(std::floor((where.y() + r) / kCellSizeM));
+  const auto lo_x = static_cast<std::int64_t>(std::floor((where.x() - radius_m) / kCellSizeM));
+  const auto hi_x = static_cast<std::int64_t>(std::floor((where.x() + radius_m) / kCellSizeM));
+  const auto lo_y = static_cast<std::int64_t>(std::floor((where.y() - radius_m) / kCellSizeM));
+  const auto hi_y = static_cast<std::int64_t>(std::floor((where.y() + radius_m) / kCellSizeM));
   for (std::int64_t cx = lo_x; cx <= hi_x; ++cx) {
     for (std::int64_t cy = lo_y; cy <= hi_y; ++cy) {
       const auto cell = grid_.find(cellKey(cx, cy));

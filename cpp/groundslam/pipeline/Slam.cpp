@@ -1,24 +1,11 @@
 #include "groundslam/pipeline/Slam.hpp"
 
 #include <algorithm>
-#include <chrono>
+
+#include "groundslam/pipeline/StageTimer.hpp"
 
 namespace groundslam {
 namespace {
-
-/// Milliseconds since the last call (or construction).
-class StageTimer {
- public:
-  double lap() {
-    const auto now = std::chrono::steady_clock::now();
-    const double ms = std::chrono::duration<double, std::milli>(now - last_).count();
-    last_ = now;
-    return ms;
-  }
-
- private:
-  std::chrono::steady_clock::time_point last_ = std::chrono::steady_clock::now();
-};
 
 /// Splits matched features into the two point lists a rigid fit takes.
 std::pair<std::vector<Eigen::Vector2d>, std::vector<Eigen::Vector2d>> matchedPoints(const std::vector<Match>& matches,
@@ -118,9 +105,9 @@ void Slam::optimiseIfDue(FrameResult& result, bool at_end) {
   const int window = config_.graph.window_frames;
   const bool full = at_end || full_optimisation_due_ || window == 0 || frame < window;
   // The window reaches back to every loop edge added since the last optimisation.
-  const int first_free = full ? 0 : std::min(frame + 1 - window, last_optimised_frame_ + 1);
-  graph_.optimise(std::max(first_free, 0));  // warm start: the current estimates are the initial values
-  if (loop_closer_) loop_closer_->mapMoved(graph_.poses(), std::max(first_free, 0));
+  const int first_free = full ? 0 : std::max(0, std::min(frame + 1 - window, last_optimised_frame_ + 1));
+  graph_.optimise(first_free);  // warm start: the current estimates are the initial values
+  if (loop_closer_) loop_closer_->mapMoved(graph_.poses(), first_free);
   window_solved_ = !full;
   full_optimisation_due_ = false;
   unoptimised_loops_ = 0;
