@@ -59,6 +59,13 @@ void train(const TrainOptions& o) {
   }
   progress.finish();
   const Vocabulary vocabulary = Vocabulary::train(descriptors, o.settings);
+  if (vocabulary.wordCount() < o.settings.branching) {
+    size_t features = 0;
+    for (const cv::Mat& d : descriptors) features += static_cast<size_t>(d.rows);
+    throw InputError("vocabulary train: the " + std::to_string(count) + " images hold " + std::to_string(features) +
+                     " ORB features, too few distinct ones for a vocabulary (" + std::to_string(vocabulary.wordCount()) +
+                     " words); train on textured images of the floor. Nothing was written.");
+  }
   writeVocabulary(o.output, vocabulary);
   std::cout << "trained " << vocabulary.wordCount() << " words (branching " << o.settings.branching << ", depth "
             << o.settings.depth << ") from " << count << " images -> " << o.output << "\n";

@@ -8,6 +8,7 @@
 #include <limits>
 #include <random>
 #include <stdexcept>
+#include <string>
 
 namespace groundslam {
 namespace {
@@ -83,12 +84,44 @@ int hammingDistance(const std::uint8_t* a, const std::uint8_t* b) { return hammi
 
 Vocabulary::Vocabulary(int branching, int depth, std::vector<Node> nodes, std::vector<double> idf)
     : branching_(branching), depth_(depth), nodes_(std::move(nodes)), idf_(std::move(idf)) {
-  for (const Node& n : nodes_) {
-    const bool leaf = n.child_count == 0;
-    if (leaf && (n.word < 0 || n.word >= static_cast<int>(idf_.size()))) throw std::invalid_argument("leaf without a valid word");
-    if (!leaf && (n.first_child <= 0 || n.first_child + n.child_count > static_cast<int>(nodes_.size()))) {
-      throw std::invalid_argument("child index out of range");
+  checkStructure();
+}
+
+void Vocabulary::checkStructure() const {
+  const auto fail = [](const std::string& what) { throw std::invalid_argument(what); };
+  if (branching_ < 2 || branching_ > kMaxBranching) fail("branching " + std::to_string(branching_) + " is not in [2, 64]");
+  if (depth_ < 1 || depth_ > kMaxDepth) fail("depth " + std::to_string(depth_) + " is not in [1, 16]");
+  if (nodes_.empty()) fail("the tree has no nodes");
+  if (idf_.empty()) fail("the vocabulary has no words");
+  const long long node_count = static_cast<long long>(nodes_.size());
+  // Children are stored after their parent, so following children always moves forward: the tree is
+  // acyclic and every descent ends at a leaf. Each node but the root has exactly one parent.
+  std::vector<int> parents(nodes_.size(), 0), level(nodes_.size(), 0);
+  std::vector<int> leaves_of_word(idf_.size(), 0);
+  for (size_t i = 0; i < nodes_.size(); ++i) {
+    const Node& n = nodes_[i];
+    const std::string node = "node " + std::to_string(i) + ": ";
+    if (n.child_count < 0 || n.child_count > branching_) fail(node + "child count " + std::to_string(n.child_count) + " is not in [0, branching]");
+    if (n.child_count == 0) {
+      if (n.word < 0 || n.word >= wordCount()) fail(node + "leaf word " + std::to_string(n.word) + " is out of range");
+      ++leaves_of_word[static_cast<size_t>(n.word)];
+      continue;
     }
+    if (n.word != -1) fail(node + "an inner node carries word " + std::to_string(n.word));
+    const long long first = n.first_child, end = first + n.child_count;
+    if (first <= static_cast<long long>(i) || end > node_count) fail(node + "child index " + std::to_string(first) + " is out of range");
+    for (long long c = first; c < end; ++c) {
+      ++parents[static_cast<size_t>(c)];
+      level[static_cast<size_t>(c)] = level[i] + 1;
+      if (level[static_cast<size_t>(c)] > depth_) fail(node + "the tree is deeper than its depth " + std::to_string(depth_));
+    }
+  }
+  for (size_t i = 1; i < nodes_.size(); ++i) {
+    if (parents[i] != 1) fail("node " + std::to_string(i) + " has " + std::to_string(parents[i]) + " parents, not 1");
+  }
+  for (size_t w = 0; w < idf_.size(); ++w) {
+    if (leaves_of_word[w] != 1) fail("word " + std::to_string(w) + " has " + std::to_string(leaves_of_word[w]) + " leaves, not 1");
+    if (!std::isfinite(idf_[w]) || idf_[w] < 0.0) fail("word " + std::to_string(w) + " has IDF weight " + std::to_string(idf_[w]));
   }
 }
 
@@ -144,6 +177,7 @@ Vocabulary Vocabulary::train(const std::vector<cv::Mat>& descriptors_per_image, 
 }
 
 int Vocabulary::wordOf(const std::uint8_t* descriptor) const {
+  if (nodes_.empty()) return -1;
   size_t node = 0;
   while (nodes_[node].child_count > 0) {
     const Node& parent = nodes_[node];

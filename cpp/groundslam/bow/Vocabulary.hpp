@@ -37,7 +37,11 @@ class Vocabulary {
   Vocabulary() = default;
   /// Trains on descriptors grouped by image (the images give the IDF weights).
   static Vocabulary train(const std::vector<cv::Mat>& descriptors_per_image, const VocabularySettings& settings);
-  /// Builds from stored parts (used by the file reader); throws std::invalid_argument when inconsistent.
+  static constexpr int kMaxBranching = 64;
+  static constexpr int kMaxDepth = 16;
+  /// Builds from stored parts (used by the file reader). Throws std::invalid_argument saying what is wrong
+  /// unless the parts form a tree: children stored after their parent, one parent per node, leaves
+  /// carrying each word exactly once, no path deeper than `depth`, finite non-negative IDF weights.
   Vocabulary(int branching, int depth, std::vector<Node> nodes, std::vector<double> idf);
 
   int branching() const { return branching_; }
@@ -48,11 +52,13 @@ class Vocabulary {
   bool empty() const { return nodes_.empty(); }
 
   /// The word a descriptor falls into (descending to the nearest child at every level).
-  int wordOf(const std::uint8_t* descriptor) const;
+  int wordOf(const std::uint8_t* descriptor) const;  ///< -1 for an empty vocabulary
   /// TF-IDF bag of words of an image's descriptors (CV_8U, 32 bytes per row), L1-normalised.
   BowVector transform(const cv::Mat& descriptors) const;
 
  private:
+  void checkStructure() const;
+
   int branching_ = 0;
   int depth_ = 0;
   std::vector<Node> nodes_;  ///< nodes_[0] is the root

@@ -47,50 +47,93 @@ Dataset openImageFolder(const fs::path& folder) {
   return dataset;
 }
 
+std::string lineRef(const std::string& file, int line_number) { return file + ":" + std::to_string(line_number); }
+
+/// HD Ground's A maps image pixels to map pixels of the same size: a rotation and a translation, up to the
+/// small errors of a real calibration. Anything else (all zero, huge, mirrored, projective) is not a pose.
+void checkMapHomography(const Eigen::Matrix3d& A, const std::string& file, int line_number) {
+  const auto bad = [&](const std::string& what) {
+    throw InputError(lineRef(file, line_number) + ": pose matrix " + what +
+                     " (expected a rotation and translation from image pixels to map pixels, last row 0 0 1)");
+  };
+  if (std::abs(A(2, 0)) > 1e-6 || std::abs(A(2, 1)) > 1e-6 || std::abs(A(2, 2) - 1.0) > 1e-6) bad("has a last row other than 0 0 1");
+  if (std::abs(A(0, 2)) > 1e9 || std::abs(A(1, 2)) > 1e9) bad("has a translation beyond 1e9 map pixels");
+  const Eigen::Vector2d c0 = A.block<2, 1>(0, 0), c1 = A.block<2, 1>(0, 1);
+  const double det = A.block<2, 2>(0, 0).determinant();
+  if (!(det > 0.0)) bad("is singular or mirrored");
+  const double scale = std::sqrt(det);
+  if (scale < 0.5 || scale > 2.0) bad("scales image pixels by " + std::to_string(scale) + ", not about 1");
+  if (std::abs(c0.norm() - c1.norm()) > 0.1 * scale || std::abs(c0.dot(c1)) > 0.1 * scale * scale) bad("is not a rotation");
+}
+
 Eigen::Matrix3d parsePoseLine(const std::string& line, const std::string& file, int line_number) {
   const std::vector<double> v = parseNumbers(line, file, line_number);
   if (v.size() != 9) {
-    throw InputError(file + ":" + std::to_string(line_number) + ": expected 9 numbers (row-major 3x3 A), got " +
-                     std::to_string(v.size()));
+    throw InputError(lineRef(file, line_number) + ": expected 9 numbers (row-major 3x3 A), got " + std::to_string(v.size()));
   }
   Eigen::Matrix3d A;
   A << v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7], v[8];
+  checkMapHomography(A, file, line_number);
   return A;
 }
 
+/// A pose line that starts with `*` and whitespace is unreliable; returns the rest of the line.
+std::optional<std::string> unreliablePoseText(const std::string& text) {
+  if (text.size() < 2 || text[0] != '*' || (text[1] != ' ' && text[1] != '\t')) return std::nullopt;
+  return text.substr(2);
+}
+
 Dataset openHdGroundList(const fs::path& list, bool with_poses) {
-  std::istringstream in(readTextFile(list.string()));
-  Dataset dataset;
-  dataset.source = list.string();
-  dataset.camera_yaml = cameraYamlIn(list.parent_path());
   const std::string file = list.string();
+  Dataset dataset;
+  dataset.source = file;
+  dataset.camera_yaml = cameraYamlIn(list.parent_path());
+  for (const HdGroundListEntry& entry : parseHdGroundList(readTextFile(file), file, with_poses)) {
+    const fs::path image = list.parent_path() / entry.image;
+    std::error_code error;
+    if (!fs::is_regular_file(image, error)) {
+      const std::string shown = entry.image.size() > 200 ? entry.image.substr(0, 200) + "..." : image.string();
+      throw InputError(lineRef(file, entry.line_number) + ": image '" + shown + "' not found" +
+                       (error ? " (" + error.message() + ")" : ""));
+    }
+    dataset.frames.push_back({image.string(), static_cast<double>(dataset.frames.size()), entry.map_from_image,
+                              entry.pose_reliable});
+  }
+  return dataset;
+}
+
+}  // namespace
+
+std::vector<HdGroundListEntry> parseHdGroundList(const std::string& text, const std::string& file, bool with_poses) {
+  std::istringstream in(text);
+  std::vector<HdGroundListEntry> entries;
   std::string line;
   bool expect_pose = false;
   int line_number = 0;
   while (std::getline(in, line)) {
     ++line_number;
-    const std::string text = trim(line);
-    if (text.empty()) continue;
+    if (line_number == 1 && line.rfind("\xEF\xBB\xBF", 0) == 0) line.erase(0, 3);  // a UTF-8 byte order mark
+    const std::string text_line = trim(line);
+    if (text_line.empty()) continue;
     if (expect_pose) {
-      const bool unreliable = text.rfind("* ", 0) == 0;
-      dataset.frames.back().map_from_image = parsePoseLine(unreliable ? text.substr(2) : text, file, line_number);
-      dataset.frames.back().pose_reliable = !unreliable;
+      const std::optional<std::string> unreliable = unreliablePoseText(text_line);
+      entries.back().map_from_image = parsePoseLine(unreliable.value_or(text_line), file, line_number);
+      entries.back().pose_reliable = !unreliable;
       expect_pose = false;
       continue;
     }
-    const fs::path image = list.parent_path() / text;
-    if (!fs::exists(image)) {
-      throw InputError(file + ":" + std::to_string(line_number) + ": image '" + image.string() + "' not found");
+    if (text_line.find('\0') != std::string::npos) throw InputError(lineRef(file, line_number) + ": image path contains a NUL byte");
+    if (text_line.size() > 4096) {
+      throw InputError(lineRef(file, line_number) + ": image path is " + std::to_string(text_line.size()) +
+                       " characters long (at most 4096)");
     }
-    dataset.frames.push_back({image.string(), static_cast<double>(dataset.frames.size()), std::nullopt, true});
+    entries.push_back({text_line, line_number, std::nullopt, true});
     expect_pose = with_poses;
   }
-  if (expect_pose) throw InputError(file + ":" + std::to_string(line_number) + ": image without a pose line");
-  if (dataset.frames.empty()) throw InputError(file + ": the list names no images");
-  return dataset;
+  if (expect_pose) throw InputError(lineRef(file, line_number) + ": image without a pose line");
+  if (entries.empty()) throw InputError(file + ": the list names no images");
+  return entries;
 }
-
-}  // namespace
 
 bool Dataset::hasGroundTruth() const {
   return std::any_of(frames.begin(), frames.end(), [](const DatasetFrame& f) { return f.map_from_image.has_value(); });

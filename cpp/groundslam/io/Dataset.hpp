@@ -30,6 +30,18 @@ struct Dataset {
   bool hasGroundTruth() const;
 };
 
+/// One image of an HD Ground list as written in the file.
+struct HdGroundListEntry {
+  std::string image;                              ///< the path as written (relative to the list's folder)
+  int line_number = 0;                            ///< the line that names the image
+  std::optional<Eigen::Matrix3d> map_from_image;  ///< its pose line's A, in a `.txt` list
+  bool pose_reliable = true;                      ///< false for a `*` pose line
+};
+
+/// Parses the text of an HD Ground list (`with_poses`: a `.txt` list, image and pose lines alternate).
+/// Checks every pose matrix; does not look at the file system. Throws InputError "FILE:LINE: ...".
+std::vector<HdGroundListEntry> parseHdGroundList(const std::string& text, const std::string& file, bool with_poses);
+
 /// Opens a list file or an image folder. Throws InputError naming the path (and line).
 Dataset openDataset(const std::string& path);
 

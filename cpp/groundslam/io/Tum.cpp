@@ -26,8 +26,10 @@ void writeTum(const std::string& path, const std::vector<StampedPose>& poses) {
   writeFileAtomically(path, formatTum(poses));
 }
 
-std::vector<StampedPose> readTum(const std::string& path) {
-  std::istringstream in(readTextFile(path));
+std::vector<StampedPose> readTum(const std::string& path) { return parseTum(readTextFile(path), path); }
+
+std::vector<StampedPose> parseTum(const std::string& text, const std::string& path) {
+  std::istringstream in(text);
   std::vector<StampedPose> poses;
   std::string line;
   for (int line_number = 1; std::getline(in, line); ++line_number) {

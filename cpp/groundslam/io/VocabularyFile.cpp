@@ -66,8 +66,9 @@ void writeVocabulary(const std::string& path, const Vocabulary& vocabulary) {
   writeFileAtomically(path, out);
 }
 
-Vocabulary readVocabulary(const std::string& path) {
-  const std::string bytes = readTextFile(path);
+Vocabulary readVocabulary(const std::string& path) { return parseVocabulary(readTextFile(path), path); }
+
+Vocabulary parseVocabulary(const std::string& bytes, const std::string& path) {
   if (bytes.size() < sizeof(kMagic) || std::memcmp(bytes.data(), kMagic, sizeof(kMagic)) != 0) {
     throw InputError(path + ": not a groundslam vocabulary file (bad magic)");
   }

@@ -13,5 +13,8 @@ constexpr unsigned kVocabularyFormatVersion = 1;
 void writeVocabulary(const std::string& path, const Vocabulary& vocabulary);
 /// Throws InputError naming the file when it is missing, truncated, corrupt or of another version.
 Vocabulary readVocabulary(const std::string& path);
+/// Parses a vocabulary file's bytes; `source` names it in errors. Validates the structure, not only the
+/// checksum. Throws InputError.
+Vocabulary parseVocabulary(const std::string& bytes, const std::string& source);
 
 }  // namespace groundslam
