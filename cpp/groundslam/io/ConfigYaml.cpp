@@ -2,16 +2,29 @@
 
 #include <algorithm>
 #include <charconv>
+#include <cmath>
+#include <filesystem>
+#include <limits>
 #include <fstream>
 #include <map>
 #include <sstream>
 
 #include <yaml-cpp/yaml.h>
 
+#include "groundslam/io/Files.hpp"
 #include "groundslam/io/InputError.hpp"
+
+namespace fs = std::filesystem;
 
 namespace groundslam {
 namespace {
+
+/// An integer field's range, narrowed to what an int holds.
+Range integerRange(Range range) {
+  range.min = std::max(range.min, static_cast<double>(std::numeric_limits<int>::min()));
+  range.max = std::min(range.max, static_cast<double>(std::numeric_limits<int>::max()));
+  return range;
+}
 
 std::string where(const std::string& source, const YAML::Node& node) {
   return source + ":" + std::to_string(node.Mark().line + 1);
@@ -25,7 +38,7 @@ std::string where(const std::string& source, const YAML::Node& node) {
 /// Reads the fields present in one parsed YAML document into a Config.
 class FieldReader {
  public:
-  FieldReader(const YAML::Node& root, const std::string& source, std::set<std::string>& set_keys)
+  FieldReader(const YAML::Node& root, const std::string& source, std::map<std::string, std::string>& set_keys)
       : root_(root), source_(source), set_keys_(set_keys) {}
 
   template <class T, class Constraint>
@@ -37,25 +50,34 @@ class FieldReader {
     if (!node) return;
     const std::string name = std::string(section) + "." + key;
     read(node, name, field, constraint);
-    set_keys_.insert(name);
+    set_keys_[name] = where(source_, node);
   }
 
+  /// Unknown, duplicate or non-text keys are errors: yaml-cpp would silently read the first of two equal keys.
   void rejectUnknownKeys() const {
-    if (!root_.IsMap()) throw InputError(source_ + ": expected a YAML mapping of sections");
+    std::set<std::string> sections;
     for (const auto& section : root_) {
-      const std::string name = section.first.as<std::string>();
+      const std::string name = keyName(section.first, "");
       const auto known = known_.find(name);
       if (known == known_.end()) fail(source_, section.first, name, "unknown section");
+      if (!sections.insert(name).second) fail(source_, section.first, name, "section given twice");
       if (section.second.IsNull()) continue;
       if (!section.second.IsMap()) fail(source_, section.second, name, "expected a mapping");
+      std::set<std::string> keys;
       for (const auto& entry : section.second) {
-        const std::string key = entry.first.as<std::string>();
-        if (!known->second.count(key)) fail(source_, entry.first, name + "." + key, "unknown key");
+        const std::string key = name + "." + keyName(entry.first, name + ".");
+        if (!known->second.count(key.substr(name.size() + 1))) fail(source_, entry.first, key, "unknown key");
+        if (!keys.insert(key).second) fail(source_, entry.first, key, "key given twice");
       }
     }
   }
 
  private:
+  std::string keyName(const YAML::Node& key, const std::string& prefix) const {
+    if (!key.IsScalar()) fail(source_, key, prefix + "?", "a key must be a plain name, not a list or mapping");
+    return key.Scalar();
+  }
+
   double number(const YAML::Node& node, const std::string& name) const {
     if (!node.IsScalar()) fail(source_, node, name, "expected a number");
     try {
@@ -66,8 +88,9 @@ class FieldReader {
   }
 
   void checkRange(const YAML::Node& node, const std::string& name, double value, const Range& range) const {
+    if (!std::isfinite(value)) fail(source_, node, name, "'" + node.Scalar() + "' is not a finite number");
     const bool below = range.min_exclusive ? value <= range.min : value < range.min;
-    if (below || value > range.max || value != value) {
+    if (below || value > range.max) {
       std::ostringstream msg;
       msg << "value " << value << " out of range " << (range.min_exclusive ? "(" : "[") << range.min << ", "
           << range.max << "]";
@@ -82,10 +105,10 @@ class FieldReader {
 
   void read(const YAML::Node& node, const std::string& name, int& field, const Range& range) const {
     const double value = number(node, name);
-    if (value != static_cast<double>(static_cast<long long>(value))) {
+    if (!std::isfinite(value) || value != std::floor(value)) {
       fail(source_, node, name, "expected an integer, got '" + node.Scalar() + "'");
     }
-    checkRange(node, name, value, range);
+    checkRange(node, name, value, integerRange(range));  // in int's range before the conversion
     field = static_cast<int>(value);
   }
 
@@ -130,7 +153,7 @@ class FieldReader {
 
   const YAML::Node& root_;
   const std::string& source_;
-  std::set<std::string>& set_keys_;
+  std::map<std::string, std::string>& set_keys_;
   std::map<std::string, std::set<std::string>> known_;
 };
 
@@ -192,25 +215,39 @@ class FieldWriter {
 }  // namespace
 
 void ConfigLoader::applyText(const std::string& yaml_text, const std::string& source) {
-  YAML::Node root;
+  std::vector<YAML::Node> documents;
   try {
-    root = YAML::Load(yaml_text);
-  } catch (const YAML::ParserException& e) {
+    documents = YAML::LoadAll(yaml_text);
+  } catch (const YAML::Exception& e) {
     throw InputError(source + ":" + std::to_string(e.mark.line + 1) + ": invalid YAML: " + e.msg);
   }
   sources_.push_back(source);
-  if (root.IsNull()) return;
-  FieldReader reader(root, source, set_keys_);
-  visitConfigFields(config_, reader);
-  reader.rejectUnknownKeys();
+  if (documents.size() > 1) {
+    throw InputError(where(source, documents[1]) + ": a second YAML document; a configuration file holds one");
+  }
+  if (documents.empty() || documents[0].IsNull()) return;
+  const YAML::Node& root = documents[0];
+  if (!root.IsMap()) throw InputError(where(source, root) + ": expected a YAML mapping of sections (camera:, features:, ...)");
+  try {
+    FieldReader reader(root, source, set_keys_);
+    visitConfigFields(config_, reader);
+    reader.rejectUnknownKeys();
+  } catch (const YAML::Exception& e) {
+    throw InputError(source + ":" + std::to_string(e.mark.line + 1) + ": " + e.msg);
+  }
 }
 
 void ConfigLoader::applyFile(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw InputError(path + ": cannot open configuration file");
-  std::stringstream text;
-  text << in.rdbuf();
-  applyText(text.str(), path);
+  std::error_code error;
+  if (!fs::exists(path, error)) throw InputError(path + ": no such configuration file");
+  if (!fs::is_regular_file(path, error)) throw InputError(path + ": not a configuration file (a folder?)");
+  const std::string before = config_.loop_closure.vocabulary;
+  applyText(readTextFile(path), path);
+  // A vocabulary named in a file is found beside that file, wherever the command runs.
+  std::string& vocabulary = config_.loop_closure.vocabulary;
+  if (vocabulary != before && !vocabulary.empty() && fs::path(vocabulary).is_relative()) {
+    vocabulary = fs::absolute(fs::path(path).parent_path() / vocabulary).lexically_normal().string();
+  }
 }
 
 Config ConfigLoader::finish() const {
@@ -220,6 +257,11 @@ Config ConfigLoader::finish() const {
     for (const auto& s : sources_) sources += (sources.empty() ? "" : ", ") + s;
     throw InputError("missing required key '" + key + "'" +
                      (sources.empty() ? std::string(" (no configuration file given)") : " in " + sources));
+  }
+  if (const std::optional<ConfigProblem> problem = findConfigProblem(config_)) {
+    const auto set_at = set_keys_.find(problem->key);
+    const std::string place = set_at != set_keys_.end() ? set_at->second : "default value";
+    throw InputError(place + ": key '" + problem->key + "': " + problem->message);
   }
   return config_;
 }

@@ -3,7 +3,7 @@
 // over the defaults; unknown keys and bad values are errors that name the file, line and key.
 
 #include <optional>
-#include <set>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -13,18 +13,20 @@ namespace groundslam {
 
 class ConfigLoader {
  public:
-  /// Applies the keys of one YAML file over what is set so far. Throws InputError.
+  /// Applies the keys of one YAML file over what is set so far; a relative `loop_closure.vocabulary` in it
+  /// is resolved against the file's folder. Throws InputError.
   void applyFile(const std::string& path);
   /// Applies YAML text; `source` names it in errors.
   void applyText(const std::string& yaml_text, const std::string& source);
-  /// The configuration; throws InputError naming a required key that no layer set.
+  /// The configuration; throws InputError naming a required key that no layer set, or the file and line
+  /// of a key whose value does not fit the others (findConfigProblem).
   Config finish() const;
   /// The configuration without the required-key check (for tools that need no camera).
   Config finishWithoutRequiredKeys() const { return config_; }
 
  private:
   Config config_;
-  std::set<std::string> set_keys_;
+  std::map<std::string, std::string> set_keys_;  ///< "section.key" -> "file:line" that set it
   std::vector<std::string> sources_;
 };
 

@@ -84,7 +84,19 @@ CameraIntrinsics intrinsicsOf(const CameraConfig& camera);
 /// Keys that a configuration must set (conventions.md): "section.key".
 const std::vector<std::string>& requiredConfigKeys();
 
-/// Calls visitor(section, key, field, constraint, doc) for every field of the configuration.
+/// A key whose value cannot be used: "section.key" and what is wrong with it.
+struct ConfigProblem {
+  std::string key;
+  std::string message;
+};
+
+/// The first problem of a configuration: a value outside its key's range or not finite, a camera mount that
+/// is not rigid or does not see the ground, an ORB pyramid whose top level is smaller than a pixel.
+std::optional<ConfigProblem> findConfigProblem(const Config& config);
+/// Throws std::invalid_argument("section.key: what is wrong") for findConfigProblem's problem.
+void validateConfig(const Config& config);
+
+/// Calls visitor(section, key, field, constraint) for every field of the configuration.
 template <class Config_, class Visitor>
 void visitConfigFields(Config_& c, Visitor&& v) {
   v("camera", "image_width", c.camera.image_width, kPositive);

@@ -22,7 +22,7 @@ std::pair<std::vector<Eigen::Vector2d>, std::vector<Eigen::Vector2d>> matchedPoi
 }  // namespace
 
 Slam::Slam(const Config& config, std::shared_ptr<const Vocabulary> vocabulary)
-    : config_(config),
+    : config_((validateConfig(config), config)),
       preparer_(config),
       matcher_(config.matching),
       graph_(config.graph.solver) {

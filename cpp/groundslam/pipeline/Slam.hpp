@@ -42,7 +42,8 @@ struct OdometryEdge {
 
 class Slam {
  public:
-  /// `vocabulary` may be null when loop closure is disabled in the configuration.
+  /// `vocabulary` may be null when loop closure is disabled in the configuration. Throws
+  /// std::invalid_argument("section.key: ...") when the configuration is unusable (validateConfig).
   Slam(const Config& config, std::shared_ptr<const Vocabulary> vocabulary);
 
   /// Processes the next image (8-bit grey) of the sequence: prepareFrame, then process.

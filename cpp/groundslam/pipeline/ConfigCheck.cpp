@@ -1,0 +1,99 @@
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+#include "groundslam/pipeline/Config.hpp"
+#include "groundslam/pipeline/FramePreparer.hpp"
+
+namespace groundslam {
+namespace {
+
+/// The first field outside its allowed values, in the order of visitConfigFields.
+class RangeChecker {
+ public:
+  template <class T, class Constraint>
+  void operator()(const char* section, const char* key, const T& field, const Constraint& constraint) {
+    if (!problem) check(std::string(section) + "." + key, field, constraint);
+  }
+
+  std::optional<ConfigProblem> problem;
+
+ private:
+  void check(const std::string& name, double value, const Range& range) {
+    if (!std::isfinite(value)) {
+      problem = ConfigProblem{name, "value " + std::to_string(value) + " is not a finite number"};
+      return;
+    }
+    const bool below = range.min_exclusive ? value <= range.min : value < range.min;
+    if (below || value > range.max) {
+      std::ostringstream msg;
+      msg << "value " << value << " out of range " << (range.min_exclusive ? "(" : "[") << range.min << ", " << range.max << "]";
+      problem = ConfigProblem{name, msg.str()};
+    }
+  }
+  void check(const std::string& name, int value, const Range& range) { check(name, static_cast<double>(value), range); }
+  void check(const std::string&, bool, const Range&) {}
+  void check(const std::string& name, const std::string& value, const Choices& choices) {
+    if (choices.empty() || std::find(choices.begin(), choices.end(), value) != choices.end()) return;
+    std::string allowed;
+    for (const auto& choice : choices) allowed += (allowed.empty() ? "" : ", ") + choice;
+    problem = ConfigProblem{name, "'" + value + "' is not one of: " + allowed};
+  }
+  template <size_t N>
+  void check(const std::string& name, const std::array<double, N>& values, const Range& range) {
+    for (double v : values) {
+      if (!problem) check(name, v, range);
+    }
+  }
+  template <class T>
+  void check(const std::string& name, const std::optional<T>& value, const Range& range) {
+    if (value) check(name, *value, range);
+  }
+};
+
+/// T_robot_camera must be a rigid transform (a rotation and a translation) of a camera above the ground
+/// whose whole image sees the ground.
+std::optional<ConfigProblem> mountProblem(const CameraConfig& camera) {
+  const std::string key = camera.T_robot_camera ? "camera.T_robot_camera" : "camera.mounting_height_m";
+  if (camera.T_robot_camera) {
+    const Eigen::Matrix<double, 4, 4, Eigen::RowMajor> T(camera.T_robot_camera->data());
+    const Eigen::Matrix3d R = T.block<3, 3>(0, 0);
+    if (!T.row(3).isApprox(Eigen::RowVector4d(0, 0, 0, 1), 1e-9) || (R.transpose() * R - Eigen::Matrix3d::Identity()).norm() > 1e-4 ||
+        R.determinant() < 0.0) {
+      return ConfigProblem{key, "not a rigid transform (rotation rows orthonormal, det +1, last row 0 0 0 1)"};
+    }
+    if (!(T(2, 3) > 0.0)) return ConfigProblem{key, "the camera is not above the ground (z = " + std::to_string(T(2, 3)) + " m)"};
+  }
+  if (cameraModelFrom(camera).groundFootprint().empty()) {
+    return ConfigProblem{key, "part of the image does not look at the ground; groundslam needs a camera facing the floor"};
+  }
+  return std::nullopt;
+}
+
+/// OpenCV's ORB shrinks the image scale_factor^(num_levels-1) times at its top level; below a pixel it fails.
+std::optional<ConfigProblem> pyramidProblem(const Config& config) {
+  const OrbSettings& f = config.features;
+  const double smallest = std::min(config.camera.image_width, config.camera.image_height) /
+                          std::pow(f.scale_factor, f.num_levels - 1);
+  if (smallest >= 1.0) return std::nullopt;
+  std::ostringstream msg;
+  msg << f.num_levels << " levels with scale_factor " << f.scale_factor << " shrink the " << config.camera.image_width << "x"
+      << config.camera.image_height << " image below one pixel at the top level; use fewer levels or a smaller factor";
+  return ConfigProblem{"features.num_levels", msg.str()};
+}
+
+}  // namespace
+
+std::optional<ConfigProblem> findConfigProblem(const Config& config) {
+  RangeChecker ranges;
+  visitConfigFields(config, ranges);
+  if (ranges.problem) return ranges.problem;
+  if (auto problem = mountProblem(config.camera)) return problem;
+  return pyramidProblem(config);
+}
+
+void validateConfig(const Config& config) {
+  if (const auto problem = findConfigProblem(config)) throw std::invalid_argument(problem->key + ": " + problem->message);
+}
+
+}  // namespace groundslam
