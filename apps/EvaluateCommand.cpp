@@ -1,5 +1,6 @@
 // `groundslam evaluate`: the paper's metrics and standard trajectory errors, for two TUM files or a run
 // folder (which adds loop-closure precision, recall and transform errors).
+#include <algorithm>
 #include <filesystem>
 #include <iostream>
 #include <memory>
@@ -26,9 +27,27 @@ struct EvaluateOptions {
   double max_time_difference = 1e-3;
 };
 
+/// The metrics of an estimate against ground truth; "nothing to compare" is an error, not a perfect score.
+TrajectoryMetrics compare(const Trajectory& groundtruth, const std::string& groundtruth_name, const Trajectory& estimate,
+                          const std::string& estimate_name, double max_time_difference) {
+  if (groundtruth.empty()) throw InputError(groundtruth_name + ": no poses (nothing to compare)");
+  if (estimate.empty()) throw InputError(estimate_name + ": no poses (nothing to compare)");
+  const TrajectoryMetrics metrics = evaluateTrajectory(groundtruth, estimate, max_time_difference).metrics;
+  if (metrics.paired_frames == 0) {
+    const auto span = [](const Trajectory& t) {
+      const auto [lo, hi] = std::minmax_element(t.begin(), t.end(), [](const auto& a, const auto& b) { return a.timestamp < b.timestamp; });
+      return std::to_string(t.size()) + " poses, t in [" + std::to_string(lo->timestamp) + ", " + std::to_string(hi->timestamp) + "]";
+    };
+    throw InputError("no pose of " + estimate_name + " (" + span(estimate) + ") has a timestamp within " +
+                     std::to_string(max_time_difference) + " s of one of " + groundtruth_name + " (" + span(groundtruth) +
+                     "): nothing to compare");
+  }
+  return metrics;
+}
+
 void evaluateFiles(const EvaluateOptions& o) {
   const TrajectoryMetrics metrics =
-      evaluateTrajectory(readTum(o.inputs[0]), readTum(o.inputs[1]), o.max_time_difference).metrics;
+      compare(readTum(o.inputs[0]), o.inputs[0], readTum(o.inputs[1]), o.inputs[1], o.max_time_difference);
   std::cout << metricsToText(metrics);
   if (!o.json.empty()) writeFileAtomically(o.json, metricsToJson(metrics));
 }
@@ -37,8 +56,10 @@ void evaluateRun(const EvaluateOptions& o) {
   const fs::path run(o.inputs[0]);
   if (!fs::exists(run / "groundtruth.tum")) throw InputError((run / "groundtruth.tum").string() + ": no ground truth in this run folder");
   const Trajectory groundtruth = readTum((run / "groundtruth.tum").string());
-  const Trajectory estimate = readTum((run / "trajectory.tum").string());
-  const TrajectoryMetrics metrics = evaluateTrajectory(groundtruth, estimate, o.max_time_difference).metrics;
+  Trajectory estimate = readTum((run / "trajectory.tum").string());
+  if (fs::exists(run / "frames.csv")) markUnmeasuredPoses((run / "frames.csv").string(), estimate);
+  const TrajectoryMetrics metrics = compare(groundtruth, (run / "groundtruth.tum").string(), estimate,
+                                            (run / "trajectory.tum").string(), o.max_time_difference);
   std::cout << metricsToText(metrics);
   LoopClosureMetrics loops;
   if (fs::exists(run / "candidates.csv")) {

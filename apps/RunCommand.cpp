@@ -9,11 +9,14 @@
 #include "Commands.hpp"
 #include "Progress.hpp"
 #include "RunOutputs.hpp"
+#include "StopSignals.hpp"
 #include "groundslam/eval/LoopClosureMetrics.hpp"
 #include "groundslam/eval/TrajectoryMetrics.hpp"
 #include "groundslam/io/ConfigYaml.hpp"
 #include "groundslam/io/Dataset.hpp"
 #include "groundslam/io/Files.hpp"
+#include "groundslam/io/InputError.hpp"
+#include "groundslam/io/RunFolder.hpp"
 #include "groundslam/io/RunFiles.hpp"
 #include "groundslam/io/Tum.hpp"
 #include "groundslam/io/VocabularyFile.hpp"
@@ -27,9 +30,16 @@ namespace {
 struct RunOptions {
   std::string dataset;
   std::string config;
-  std::string out_dir = "runs/latest";
+  std::string out_dir;  ///< empty: a new folder under runs/, with runs/latest pointing at it
   bool no_loop_closure = false;
   bool report = false;
+};
+
+/// How far a run got: every frame, or the frames before a stop signal.
+struct RunProgress {
+  size_t processed = 0;
+  size_t total = 0;
+  bool interrupted() const { return processed < total; }
 };
 
 Config loadRunConfig(const Dataset& dataset, const RunOptions& o) {
@@ -38,15 +48,22 @@ Config loadRunConfig(const Dataset& dataset, const RunOptions& o) {
   return config;
 }
 
-std::shared_ptr<const Vocabulary> loadVocabulary(const Config& config) {
-  if (!config.loop_closure.enabled) return nullptr;
-  const std::string path = config.loop_closure.vocabulary.empty() ? defaultVocabularyPath() : config.loop_closure.vocabulary;
-  return std::make_shared<const Vocabulary>(readVocabulary(path));
+std::string vocabularyPath(const Config& config) {
+  return config.loop_closure.vocabulary.empty() ? defaultVocabularyPath() : config.loop_closure.vocabulary;
 }
 
-/// Runs every frame through the pipeline, with a progress line on a terminal. The next frames are decoded
-/// and their features extracted on other threads (a FramePreparer each) while the current one goes
-/// through the back end, so both cores stay busy.
+std::shared_ptr<const Vocabulary> loadVocabulary(const Config& config) {
+  if (!config.loop_closure.enabled) return nullptr;
+  try {
+    return std::make_shared<const Vocabulary>(readVocabulary(vocabularyPath(config)));
+  } catch (const InputError& e) {
+    throw InputError(std::string("key 'loop_closure.vocabulary': ") + e.what());
+  }
+}
+
+/// Runs the frames through the pipeline until the last one or a stop signal, with a progress line on a
+/// terminal. The next frames are decoded and their features extracted on other threads (a FramePreparer
+/// each) while the current one goes through the back end, so both cores stay busy.
 std::vector<FrameResult> processAll(const Dataset& dataset, const Config& config, Slam& slam, std::vector<double>& load_ms) {
   struct Loaded {
     double load_ms;
@@ -67,7 +84,7 @@ std::vector<FrameResult> processAll(const Dataset& dataset, const Config& config
   for (size_t j = 0; j < std::min(n, kPrefetch); ++j) ahead.push_back(std::async(std::launch::async, prepare, j));
   std::vector<FrameResult> results;
   Progress progress("run", static_cast<int>(n));
-  for (size_t i = 0; i < n; ++i) {
+  for (size_t i = 0; i < n && stopSignal() == 0; ++i) {
     Loaded current = ahead.front().get();
     ahead.pop_front();
     if (i + kPrefetch < n) ahead.push_back(std::async(std::launch::async, prepare, i + kPrefetch));
@@ -75,47 +92,103 @@ std::vector<FrameResult> processAll(const Dataset& dataset, const Config& config
     results.push_back(slam.process(std::move(current.frame)));
     progress.update(static_cast<int>(results.size()));
   }
+  for (auto& pending : ahead) pending.wait();  // frames prepared ahead of a stop are dropped
   slam.finish();
   progress.finish();
   return results;
 }
 
-void run(const RunOptions& o) {
-  const Dataset dataset = openDataset(o.dataset);
-  const Config config = loadRunConfig(dataset, o);
-  Slam slam(config, loadVocabulary(config));
-  const fs::path out(o.out_dir);
-  fs::create_directories(out);
-  // A result folder must never mix a new configuration with an old trajectory.
-  for (const char* stale : {"trajectory.tum", "groundtruth.tum", "frames.csv", "metrics.json", "loop_closures.csv",
-                            "candidates.csv", "graph.g2o"}) {
-    fs::remove(out / stale);
-  }
-  writeFileAtomically((out / "config.yaml").string(), configToYaml(config));
+/// A YAML single-quoted string: quotes doubled.
+std::string quoted(const std::string& text) {
+  std::string out = "'";
+  for (char c : text) out += c == '\'' ? std::string("''") : std::string(1, c);
+  return out + "'";
+}
 
+std::string runYaml(const RunOptions& o, const RunProgress& progress) {
+  return "# groundslam run folder\nstatus: " + std::string(progress.interrupted() ? "interrupted" : "complete") +
+         "\nframes_processed: " + std::to_string(progress.processed) + "\nframes_total: " + std::to_string(progress.total) +
+         "\ndataset: " + quoted(o.dataset) + "\n";
+}
+
+/// Runs SLAM on the dataset and writes every result file into `folder`, a fresh folder of this run's own.
+RunProgress runInto(const std::string& folder, const RunOptions& o, const Dataset& dataset, const Config& config) {
+  const auto file = [&](const char* name) { return (fs::path(folder) / name).string(); };
+  Slam slam(config, loadVocabulary(config));
+  writeNewFile(file("config.yaml"), configToYaml(config));
   std::vector<double> load_ms;
   const std::vector<FrameResult> results = processAll(dataset, config, slam, load_ms);
+  const RunProgress progress{results.size(), dataset.frames.size()};
   const Trajectory trajectory = slam.trajectory();
-  writeFileAtomically((out / "frames.csv").string(), formatFramesCsv(results, load_ms));
-  writeFileAtomically((out / "loop_closures.csv").string(), formatLoopClosuresCsv(slam.loopCandidates()));
-  writeFileAtomically((out / "graph.g2o").string(), formatG2o(slam.graph()));
-  std::cout << "processed " << results.size() << " frames (" << countFallbacks(results) << " with fallback odometry, "
-            << countLoopClosures(results) << " loop closures)\n";
+  writeNewFile(file("frames.csv"), formatFramesCsv(results, load_ms));
+  writeNewFile(file("loop_closures.csv"), formatLoopClosuresCsv(slam.loopCandidates()));
+  writeNewFile(file("graph.g2o"), formatG2o(slam.graph()));
+  const int fallbacks = countFallbacks(results);
+  std::cout << "processed " << results.size() << " of " << dataset.frames.size() << " frames: "
+            << static_cast<int>(results.size()) - fallbacks << " measured, " << fallbacks
+            << " with fallback odometry (pose assumed from earlier motion), " << countLoopClosures(results)
+            << " loop closures\n";
   std::vector<std::optional<CandidateTruth>> truths;
-  if (dataset.hasGroundTruth()) {
-    const Trajectory groundtruth = groundTruthOf(dataset, config);
-    writeTum((out / "groundtruth.tum").string(), groundtruth);
+  const Trajectory groundtruth = dataset.hasGroundTruth() ? groundTruthOf(dataset, config) : Trajectory{};
+  if (dataset.hasGroundTruth() && groundtruth.empty()) {
+    std::cout << "no metrics: every pose line of " << dataset.source << " is marked unreliable\n";
+  } else if (!groundtruth.empty()) {
+    writeNewFile(file("groundtruth.tum"), formatTum(groundtruth));
     std::vector<double> timestamps;
     for (const auto& p : trajectory) timestamps.push_back(p.timestamp);
     truths = candidateTruths(slam.loopCandidates(), timestamps, groundtruth, cameraModelFrom(config.camera).groundFootprint());
     const TrajectoryMetrics metrics = evaluateTrajectory(groundtruth, trajectory).metrics;
     const LoopClosureMetrics loops = summariseLoopClosures(slam.loopCandidates(), truths);
-    writeFileAtomically((out / "metrics.json").string(), runMetricsJson(metrics, loops));
+    writeNewFile(file("metrics.json"), runMetricsJson(metrics, loops));
     std::cout << metricsToText(metrics) << loopMetricsToText(loops);
   }
-  writeFileAtomically((out / "candidates.csv").string(), formatCandidatesCsv(slam.loopCandidates(), truths));
-  writeTum((out / "trajectory.tum").string(), trajectory);  // last: its presence marks a finished run
-  std::cout << "results in " << out.string() << "\n";
+  writeNewFile(file("candidates.csv"), formatCandidatesCsv(slam.loopCandidates(), truths));
+  writeNewFile(file("trajectory.tum"), formatTum(trajectory));
+  writeNewFile(file("run.yaml"), runYaml(o, progress));  // last: its status says whether the run finished
+  return progress;
+}
+
+/// Every file the run reads: none may lie inside the output folder that the run replaces.
+std::vector<std::string> runInputs(const RunOptions& o, const Dataset& dataset, const Config& config) {
+  std::vector<std::string> inputs = {o.dataset, o.config, dataset.camera_yaml.value_or("")};
+  if (config.loop_closure.enabled) inputs.push_back(vocabularyPath(config));
+  return inputs;
+}
+
+void run(const RunOptions& o) {
+  const Dataset dataset = openDataset(o.dataset);
+  const Config config = loadRunConfig(dataset, o);
+  const std::string target = o.out_dir.empty() ? newRunFolderName("runs") : o.out_dir;
+  RunFolder folder(target, runInputs(o, dataset, config));
+  installStopHandlers();
+  RunProgress progress = runInto(folder.stagingFolder(), o, dataset, config);
+  if (o.report && !progress.interrupted()) {
+    if (!o.no_loop_closure) {
+      RunOptions odometry = o;
+      odometry.no_loop_closure = true;
+      const std::string odometry_folder = folder.path("odometry");
+      fs::create_directory(odometry_folder);
+      std::cout << "odometry-only run for the report:\n";
+      const RunProgress odometry_progress = runInto(odometry_folder, odometry, dataset, loadRunConfig(dataset, odometry));
+      if (odometry_progress.interrupted()) progress.processed = std::min(progress.processed, odometry_progress.processed);
+    }
+    if (!progress.interrupted() && stopSignal() == 0) writeReport(folder.stagingFolder(), "");
+  }
+  if (progress.interrupted()) {
+    const std::string where = folder.commitPartial();
+    std::cout << "interrupted: partial results (" << progress.processed << " of " << progress.total
+              << " frames; run.yaml says so) in " << where << "\n";
+    throw Interrupted{stopSignal()};
+  }
+  const std::string where = folder.commit();
+  if (o.out_dir.empty() && !pointLatestAt("runs", where)) {
+    std::cout << "note: runs/latest is not a symbolic link, left as it is\n";
+  }
+  std::cout << "results in " << where << (o.out_dir.empty() ? " (runs/latest)" : "") << "\n";
+  if (stopSignal() != 0) {
+    std::cout << "interrupted after the last frame: the results are complete" << (o.report ? ", the report was not drawn" : "") << "\n";
+    throw Interrupted{stopSignal()};
+  }
 }
 
 }  // namespace
@@ -125,21 +198,12 @@ void addRunCommand(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand("run", "Run SLAM on an HD Ground list or an image folder");
   cmd->add_option("DATASET", o->dataset, "HD Ground list (.txt/.test) or image folder")->required();
   cmd->add_option("--config", o->config, "Configuration YAML, applied over camera.yaml beside the dataset");
-  cmd->add_option("--out", o->out_dir, "Run folder for the results")->capture_default_str();
+  cmd->add_option("--out", o->out_dir,
+                  "Run folder for the results; replaced only when the run succeeds, refused when it holds other files "
+                  "(default: a new folder runs/YYYYmmdd_HHMMSS, with runs/latest pointing at it)");
   cmd->add_flag("--no-loop-closure", o->no_loop_closure, "Odometry only (sets loop_closure.enabled = false)");
   cmd->add_flag("--report", o->report, "Also run odometry only into DIR/odometry and write DIR/report.html");
-  cmd->callback([o]() {
-    run(*o);
-    if (!o->report) return;
-    if (!o->no_loop_closure) {
-      RunOptions odometry = *o;
-      odometry.no_loop_closure = true;
-      odometry.out_dir = (fs::path(o->out_dir) / "odometry").string();
-      std::cout << "odometry-only run for the report:\n";
-      run(odometry);
-    }
-    writeReport(o->out_dir, "");
-  });
+  cmd->callback([o]() { run(*o); });
 }
 
 }  // namespace groundslam::apps

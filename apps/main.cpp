@@ -6,6 +6,7 @@
 #include <opencv2/core.hpp>
 
 #include "Commands.hpp"
+#include "StopSignals.hpp"
 #include "groundslam/io/InputError.hpp"
 
 int main(int argc, char** argv) {
@@ -21,6 +22,8 @@ int main(int argc, char** argv) {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return app.exit(e);
+  } catch (const groundslam::apps::Interrupted& stop) {
+    return 128 + stop.signal;
   } catch (const groundslam::InputError& e) {
     std::cerr << "groundslam: error: " << e.what() << "\n";
     return 2;

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
+#include <string>
 
 #include <Eigen/Geometry>
 
@@ -15,6 +17,7 @@ struct PosePair {
   double timestamp;
   Pose2 first;   ///< ground truth
   Pose2 second;  ///< estimate
+  bool measured;  ///< the estimate was measured, not assumed
 };
 
 /// Pairs of (ground truth, estimate) with matching timestamps; both inputs in any order.
@@ -33,17 +36,30 @@ std::vector<PosePair> pairByTime(Trajectory groundtruth, Trajectory estimate, do
       best = j + 1;
     }
     if (!estimate.empty() && std::abs(estimate[best].timestamp - gt.timestamp) <= max_dt) {
-      pairs.push_back({gt.timestamp, gt.T_world_robot, estimate[best].T_world_robot});
+      pairs.push_back({gt.timestamp, gt.T_world_robot, estimate[best].T_world_robot, estimate[best].measured});
     }
   }
   return pairs;
 }
 
 double rms(const std::vector<double>& values) {
-  if (values.empty()) return 0.0;
+  if (values.empty()) return std::numeric_limits<double>::quiet_NaN();
   double sum = 0.0;
   for (double v : values) sum += v * v;
   return std::sqrt(sum / static_cast<double>(values.size()));
+}
+
+/// A JSON number, or null when it is not finite.
+std::string jsonNumber(double value, int decimals) {
+  if (!std::isfinite(value)) return "null";
+  char text[64];
+  std::snprintf(text, sizeof(text), "%.*f", decimals, value);
+  return text;
+}
+
+/// A figure for people: "n/a" when it is not a number.
+std::string textNumber(double value, int decimals, double factor = 1.0) {
+  return std::isfinite(value) ? jsonNumber(factor * value, decimals) : "n/a";
 }
 
 }  // namespace
@@ -73,7 +89,14 @@ TrajectoryEvaluation evaluateTrajectory(const Trajectory& groundtruth, const Tra
   m.groundtruth_frames = static_cast<int>(groundtruth.size());
   m.paired_frames = static_cast<int>(pairs.size());
   m.fraction_estimated = groundtruth.empty() ? 0.0 : static_cast<double>(pairs.size()) / static_cast<double>(groundtruth.size());
-  if (pairs.empty()) return result;
+  m.measured_frames = static_cast<int>(std::count_if(pairs.begin(), pairs.end(), [](const PosePair& p) { return p.measured; }));
+  m.fraction_measured = groundtruth.empty() ? 0.0 : static_cast<double>(m.measured_frames) / static_cast<double>(groundtruth.size());
+  if (pairs.empty()) {
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    m.translation_mae_m = m.translation_mae_cm_per_m = m.rotation_mae_deg = m.ate_rmse_m = nan;
+    m.rpe_translation_rmse_m = m.rpe_rotation_rmse_deg = nan;
+    return result;
+  }
 
   // The paper anchors the first estimated pose to the first ground-truth pose.
   const Pose2 T_gt_est = pairs.front().first * pairs.front().second.inverse();
@@ -93,7 +116,8 @@ TrajectoryEvaluation evaluateTrajectory(const Trajectory& groundtruth, const Tra
   }
   m.translation_mae_m = sum_t / static_cast<double>(pairs.size());
   m.rotation_mae_deg = sum_r / static_cast<double>(pairs.size());
-  m.translation_mae_cm_per_m = m.path_length_m > 0.0 ? 100.0 * m.translation_mae_m / m.path_length_m : 0.0;
+  m.translation_mae_cm_per_m = m.path_length_m > 0.0 ? 100.0 * m.translation_mae_m / m.path_length_m
+                                                     : std::numeric_limits<double>::quiet_NaN();
 
   const Pose2 T_align = alignSE2(estimated_positions, true_positions);
   std::vector<double> ate, rpe_t, rpe_r;
@@ -113,31 +137,37 @@ TrajectoryEvaluation evaluateTrajectory(const Trajectory& groundtruth, const Tra
 }
 
 std::string metricsToJson(const TrajectoryMetrics& m) {
-  char text[1024];
-  std::snprintf(text, sizeof(text),
-                "{\n  \"groundtruth_frames\": %d,\n  \"paired_frames\": %d,\n  \"fraction_estimated\": %.6f,\n"
-                "  \"path_length_m\": %.6f,\n  \"translation_mae_m\": %.9f,\n  \"translation_mae_cm_per_m\": %.6f,\n"
-                "  \"rotation_mae_deg\": %.6f,\n  \"ate_rmse_m\": %.9f,\n  \"rpe_translation_rmse_m\": %.9f,\n"
-                "  \"rpe_rotation_rmse_deg\": %.6f\n}\n",
-                m.groundtruth_frames, m.paired_frames, m.fraction_estimated, m.path_length_m, m.translation_mae_m,
-                m.translation_mae_cm_per_m, m.rotation_mae_deg, m.ate_rmse_m, m.rpe_translation_rmse_m,
-                m.rpe_rotation_rmse_deg);
-  return text;
+  std::string json = "{\n";
+  const auto field = [&](const char* name, const std::string& value, bool last = false) {
+    json += std::string("  \"") + name + "\": " + value + (last ? "\n" : ",\n");
+  };
+  field("groundtruth_frames", std::to_string(m.groundtruth_frames));
+  field("paired_frames", std::to_string(m.paired_frames));
+  field("fraction_estimated", jsonNumber(m.fraction_estimated, 6));
+  field("measured_frames", std::to_string(m.measured_frames));
+  field("fraction_measured", jsonNumber(m.fraction_measured, 6));
+  field("path_length_m", jsonNumber(m.path_length_m, 6));
+  field("translation_mae_m", jsonNumber(m.translation_mae_m, 9));
+  field("translation_mae_cm_per_m", jsonNumber(m.translation_mae_cm_per_m, 6));
+  field("rotation_mae_deg", jsonNumber(m.rotation_mae_deg, 6));
+  field("ate_rmse_m", jsonNumber(m.ate_rmse_m, 9));
+  field("rpe_translation_rmse_m", jsonNumber(m.rpe_translation_rmse_m, 9));
+  field("rpe_rotation_rmse_deg", jsonNumber(m.rpe_rotation_rmse_deg, 6), true);
+  return json + "}\n";
 }
 
 std::string metricsToText(const TrajectoryMetrics& m) {
-  char text[1024];
-  std::snprintf(text, sizeof(text),
-                "frames estimated      %d / %d (%.1f%%)\n"
-                "path length           %.3f m\n"
-                "translational MAE     %.3f cm/m  (%.2f mm, first pose anchored)\n"
-                "rotational MAE        %.3f deg\n"
-                "ATE RMSE (SE2-aligned) %.2f mm\n"
-                "RPE RMSE (per frame)  %.3f mm, %.4f deg\n",
-                m.paired_frames, m.groundtruth_frames, 100.0 * m.fraction_estimated, m.path_length_m,
-                m.translation_mae_cm_per_m, 1000.0 * m.translation_mae_m, m.rotation_mae_deg, 1000.0 * m.ate_rmse_m,
-                1000.0 * m.rpe_translation_rmse_m, m.rpe_rotation_rmse_deg);
-  return text;
+  char coverage[256];
+  std::snprintf(coverage, sizeof(coverage),
+                "frames measured       %d / %d (%.1f%%; %d more with a pose assumed from earlier motion)\n",
+                m.measured_frames, m.groundtruth_frames, 100.0 * m.fraction_measured, m.paired_frames - m.measured_frames);
+  return std::string(coverage) + "path length           " + textNumber(m.path_length_m, 3) + " m\n" +
+         "translational MAE     " + textNumber(m.translation_mae_cm_per_m, 3) + " cm/m  (" +
+         textNumber(m.translation_mae_m, 2, 1000.0) + " mm, first pose anchored)\n" +
+         "rotational MAE        " + textNumber(m.rotation_mae_deg, 3) + " deg\n" +
+         "ATE RMSE (SE2-aligned) " + textNumber(m.ate_rmse_m, 2, 1000.0) + " mm\n" +
+         "RPE RMSE (per frame)  " + textNumber(m.rpe_translation_rmse_m, 3, 1000.0) + " mm, " +
+         textNumber(m.rpe_rotation_rmse_deg, 4) + " deg\n";
 }
 
 }  // namespace groundslam

@@ -1,8 +1,10 @@
 #include "groundslam/io/RunFiles.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <map>
+#include <set>
 #include <sstream>
 
 #include "groundslam/io/Files.hpp"
@@ -84,6 +86,38 @@ std::vector<LoopCandidate> readCandidatesCsv(const std::string& path) {
     }
   }
   return candidates;
+}
+
+void markUnmeasuredPoses(const std::string& path, Trajectory& trajectory) {
+  std::istringstream in(readTextFile(path));
+  std::string line;
+  std::getline(in, line);
+  std::vector<std::string> header;
+  std::stringstream header_row(line);
+  for (std::string cell; std::getline(header_row, cell, ',');) header.push_back(trim(cell));
+  const auto column = [&](const std::string& name) {
+    const auto it = std::find(header.begin(), header.end(), name);
+    if (it == header.end()) throw InputError(path + ":1: no '" + name + "' column");
+    return static_cast<size_t>(it - header.begin());
+  };
+  const size_t time_column = column("timestamp"), status_column = column("status");
+  std::set<double> unmeasured;
+  for (int number = 2; std::getline(in, line); ++number) {
+    if (trim(line).empty()) continue;
+    std::vector<std::string> cells;
+    std::stringstream row(line);
+    for (std::string cell; std::getline(row, cell, ',');) cells.push_back(cell);
+    if (cells.size() <= std::max(time_column, status_column)) throw InputError(path + ":" + std::to_string(number) + ": too few columns");
+    if (cells[status_column].rfind("fallback", 0) != 0) continue;
+    unmeasured.insert(parseNumbers(cells[time_column], path, number).at(0));
+  }
+  for (StampedPose& pose : trajectory) {
+    // frames.csv writes 9 significant digits; a TUM file 9 decimals.
+    const auto near = unmeasured.lower_bound(pose.timestamp - 1e-6 * std::max(1.0, std::abs(pose.timestamp)));
+    if (near != unmeasured.end() && std::abs(*near - pose.timestamp) <= 1e-6 * std::max(1.0, std::abs(pose.timestamp))) {
+      pose.measured = false;
+    }
+  }
 }
 
 std::string formatG2o(const PoseGraph& graph) {

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "groundslam/core/PoseGraph.hpp"
+#include "groundslam/core/Trajectory.hpp"
 #include "groundslam/eval/LoopClosureMetrics.hpp"
 #include "groundslam/pipeline/LoopClosure.hpp"
 
@@ -21,6 +22,10 @@ std::string formatCandidatesCsv(const std::vector<LoopCandidate>& candidates,
                                 const std::vector<std::optional<CandidateTruth>>& truths);
 /// Reads the candidates back (scores, gate, transform). Throws InputError naming file and line.
 std::vector<LoopCandidate> readCandidatesCsv(const std::string& path);
+
+/// Marks the poses of frames whose `frames.csv` status is a fallback as not measured (paired by timestamp).
+/// Throws InputError naming file and line.
+void markUnmeasuredPoses(const std::string& frames_csv_path, Trajectory& trajectory);
 
 /// `graph.g2o`: VERTEX_SE2 id x y theta, EDGE_SE2 a b dx dy dtheta I11 I12 I13 I22 I23 I33.
 std::string formatG2o(const PoseGraph& graph);

@@ -50,9 +50,11 @@ FrameResult Slam::process(PreparedFrame prepared) {
     if (!odometry.fallback) last_good_odometry_ = odometry;
     addToGraph(odometry);
     result.status = odometry.fallback ? std::string("fallback_") + fitStatusName(odometry.fit_status) : "ok";
+    measured_.push_back(!odometry.fallback);
   } else {
     graph_.addPose(Pose2());
     result.status = "first";
+    measured_.push_back(true);
   }
 
   // §III-C: loop closures through the three gates become graph edges; the graph is optimised (LM).
@@ -159,7 +161,7 @@ OdometryEdge Slam::fallbackOdometry(OdometryEdge failed) const {
 
 Trajectory Slam::trajectory() const {
   Trajectory trajectory;
-  for (size_t i = 0; i < graph_.poses().size(); ++i) trajectory.push_back({timestamps_[i], graph_.poses()[i]});
+  for (size_t i = 0; i < graph_.poses().size(); ++i) trajectory.push_back({timestamps_[i], graph_.poses()[i], measured_[i]});
   return trajectory;
 }
 

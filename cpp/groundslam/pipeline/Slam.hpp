@@ -80,6 +80,7 @@ class Slam {
   std::optional<Keyframe> previous_;
   std::optional<OdometryEdge> last_good_odometry_;
   std::vector<double> timestamps_;
+  std::vector<bool> measured_;  ///< per frame: its pose came from a measurement, not a fallback
   std::vector<LoopCandidate> candidates_;
   int unoptimised_loops_ = 0;
   bool full_optimisation_due_ = false;  ///< a loop closure corrected the estimate by more than graph.full_optimisation_correction_m
