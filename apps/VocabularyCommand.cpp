@@ -52,7 +52,8 @@ void train(const TrainOptions& o) {
   Progress progress("extract", static_cast<int>(count));
   for (size_t i = 0; i < count; ++i) {
     const std::string& path = all[i * all.size() / count];
-    const cv::Mat image = cv::imread(path, cv::IMREAD_GRAYSCALE);
+    cv::Mat image = cv::imread(path, cv::IMREAD_GRAYSCALE | cv::IMREAD_ANYDEPTH);
+    if (image.depth() == CV_16U) image = toEightBit(image);
     if (image.empty()) throw InputError(path + ": image not found or does not decode");
     descriptors.push_back(extractor.detect(image).descriptors);
     progress.update(static_cast<int>(i + 1));

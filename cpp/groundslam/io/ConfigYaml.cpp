@@ -7,6 +7,7 @@
 #include <limits>
 #include <fstream>
 #include <map>
+#include <iomanip>
 #include <sstream>
 
 #include <yaml-cpp/yaml.h>
@@ -92,7 +93,7 @@ class FieldReader {
     const bool below = range.min_exclusive ? value <= range.min : value < range.min;
     if (below || value > range.max) {
       std::ostringstream msg;
-      msg << "value " << value << " out of range " << (range.min_exclusive ? "(" : "[") << range.min << ", "
+      msg << std::setprecision(12) << "value " << value << " out of range " << (range.min_exclusive ? "(" : "[") << range.min << ", "
           << range.max << "]";
       fail(source_, node, name, msg.str());
     }

@@ -194,16 +194,4 @@ std::string formatHdGroundList(const std::vector<std::string>& relative_image_pa
   return text;
 }
 
-cv::Mat loadGrayImage(const std::string& path, int expected_width, int expected_height) {
-  if (!fs::exists(path)) throw InputError(path + ": image not found");
-  const cv::Mat image = cv::imread(path, cv::IMREAD_GRAYSCALE);
-  if (image.empty()) throw InputError(path + ": image does not decode");
-  if (image.cols != expected_width || image.rows != expected_height) {
-    throw InputError(path + ": image is " + std::to_string(image.cols) + "x" + std::to_string(image.rows) +
-                     ", the camera configuration says " + std::to_string(expected_width) + "x" +
-                     std::to_string(expected_height));
-  }
-  return image;
-}
-
 }  // namespace groundslam

@@ -12,6 +12,7 @@
 #include "groundslam/core/CameraModel.hpp"
 #include "groundslam/core/Pose2.hpp"
 #include "groundslam/core/Trajectory.hpp"
+#include "groundslam/io/ImageFile.hpp"
 #include "groundslam/pipeline/Config.hpp"
 
 namespace groundslam {
@@ -60,8 +61,5 @@ Trajectory groundTruthOf(const Dataset& dataset, const Config& config);
 /// Writes an HD Ground list: image paths (relative to the list's folder) and their A matrices.
 std::string formatHdGroundList(const std::vector<std::string>& relative_image_paths,
                                const std::vector<Eigen::Matrix3d>& map_from_image);
-
-/// Loads an image as 8-bit grey; throws InputError when it does not decode or has the wrong size.
-cv::Mat loadGrayImage(const std::string& path, int expected_width, int expected_height);
 
 }  // namespace groundslam

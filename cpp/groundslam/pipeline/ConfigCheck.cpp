@@ -1,4 +1,5 @@
 #include <cmath>
+#include <iomanip>
 #include <sstream>
 #include <stdexcept>
 
@@ -27,7 +28,7 @@ class RangeChecker {
     const bool below = range.min_exclusive ? value <= range.min : value < range.min;
     if (below || value > range.max) {
       std::ostringstream msg;
-      msg << "value " << value << " out of range " << (range.min_exclusive ? "(" : "[") << range.min << ", " << range.max << "]";
+      msg << std::setprecision(12) << "value " << value << " out of range " << (range.min_exclusive ? "(" : "[") << range.min << ", " << range.max << "]";
       problem = ConfigProblem{name, msg.str()};
     }
   }
