@@ -85,6 +85,11 @@ void addEvaluateCommand(CLI::App& app) {
   cmd->add_option("--max-time-diff", o->max_time_difference, "Largest timestamp difference of a pair, seconds")
       ->check(CLI::NonNegativeNumber)->capture_default_str();
   cmd->callback([o]() {
+    for (const auto& input : o->inputs) {
+      if (!o->json.empty() && fs::exists(o->json) && fs::equivalent(o->json, input)) {
+        throw InputError("--json " + o->json + ": is an input; choose another file");
+      }
+    }
     if (o->inputs.size() == 2) {
       evaluateFiles(*o);
     } else if (fs::is_directory(o->inputs[0])) {

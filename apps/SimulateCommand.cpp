@@ -89,6 +89,11 @@ void simulate(SimulateOptions& o) {
     if (user_texture.empty()) throw InputError(o.texture_image + ": texture image not found or does not decode");
   }
   const sim::SequenceSimulator simulator(settings, user_texture);
+  // A folder that holds something other than an earlier simulation is not overwritten.
+  std::error_code error;
+  if (fs::exists(o.out_dir, error) && !fs::is_empty(o.out_dir, error) && !fs::exists(fs::path(o.out_dir) / "simulation.yaml", error)) {
+    throw InputError(o.out_dir + ": the folder exists and holds no earlier simulation; choose a new or empty folder");
+  }
   fs::create_directories(fs::path(o.out_dir) / "images");
 
   Config config;

@@ -46,6 +46,12 @@ void train(const TrainOptions& o) {
   const OrbExtractor extractor(loader.finishWithoutRequiredKeys().features);
   const std::vector<std::string> all = imagePaths(o.inputs);
   if (all.empty()) throw InputError("vocabulary train: the inputs hold no images");
+  std::error_code error;
+  for (const auto& input : o.inputs) {
+    if (fs::exists(o.output, error) && fs::equivalent(o.output, input, error)) {
+      throw InputError("-o " + o.output + ": is an input; choose another file");
+    }
+  }
   // An even sample over all inputs keeps training time bounded.
   const size_t count = std::min(all.size(), static_cast<size_t>(o.max_images));
   std::vector<cv::Mat> descriptors;

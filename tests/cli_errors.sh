@@ -37,6 +37,18 @@ printf 'loop_closure:\n  vocabulary: %s\n' "$tmp/garbage.gslmvoc" >"$tmp/bad_voc
 expect_error "corrupt vocabulary" "garbage.gslmvoc: not a groundslam vocabulary file" "$bin" run "$tmp/seq/sequence.txt" --config "$tmp/bad_vocabulary.yaml" --out "$tmp/run"
 expect_error "vocabulary from nothing" "nothing.txt" "$bin" vocabulary train "$tmp/seq/nothing.txt" -o "$tmp/v.gslmvoc"
 expect_error "evaluate a folder without ground truth" "groundtruth.tum" "$bin" evaluate "$tmp/seq/images"
+mkdir -p "$tmp/user_folder" && echo notes >"$tmp/user_folder/notes.txt"
+expect_error "simulate into a folder of other files" "holds no earlier simulation" "$bin" simulate "$tmp/user_folder" --frames 3
+"$bin" run "$tmp/seq/sequence.txt" --out "$tmp/good_run" >/dev/null
+expect_error "evaluate --json over an input" "is an input" "$bin" evaluate "$tmp/good_run/groundtruth.tum" "$tmp/good_run/trajectory.tum" --json "$tmp/good_run/trajectory.tum"
+expect_error "config naming a folder" "not a configuration file" "$bin" run "$tmp/seq/sequence.txt" --config "$tmp/seq" --out "$tmp/run"
+printf 'loop_closure:\n  vocabulary: no_such.gslmvoc\n' >"$tmp/missing_vocabulary.yaml"
+expect_error "missing vocabulary names the key and the resolved path" "key 'loop_closure.vocabulary': $tmp/no_such.gslmvoc" "$bin" run "$tmp/seq/sequence.txt" --config "$tmp/missing_vocabulary.yaml" --out "$tmp/run"
+for crafted in "$(cd "$(dirname "$0")" && pwd)"/data/vocabulary/*.gslmvoc; do
+  case $crafted in *valid_*) continue ;; esac
+  printf 'loop_closure:\n  vocabulary: %s\n' "$crafted" >"$tmp/crafted_vocabulary.yaml"
+  expect_error "crafted vocabulary $(basename "$crafted")" "vocabulary file is inconsistent" "$bin" run "$tmp/seq/sequence.txt" --config "$tmp/crafted_vocabulary.yaml" --out "$tmp/run"
+done
 [ -d "$tmp/run" ] && [ -f "$tmp/run/trajectory.tum" ] && { echo "FAIL: a failed run left a trajectory"; failures=$((failures + 1)); }
 echo "$passes passed, $failures failed"
 [ $failures -eq 0 ]
