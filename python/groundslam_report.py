@@ -257,10 +257,14 @@ def metrics_rows(metrics, label):
     names = [("translation_mae_cm_per_m", "translational MAE (cm/m)"), ("rotation_mae_deg", "rotational MAE (deg)"),
              ("ate_rmse_m", "ATE RMSE (m)"), ("rpe_translation_rmse_m", "RPE translation RMSE (m)"),
              ("rpe_rotation_rmse_deg", "RPE rotation RMSE (deg)"), ("fraction_estimated", "fraction of frames estimated"),
+             ("fraction_measured", "fraction of frames measured (not assumed after an odometry failure)"),
              ("path_length_m", "path length (m)")]
-    rows = "".join(f"<tr><td>{label}</td><td>{n}</td><td>{metrics[k]:.6g}</td></tr>" for k, n in names if k in metrics)
+    def shown(value):  # metrics.json writes null for a figure with nothing to compare
+        return "n/a" if value is None else f"{value:.6g}"
+
+    rows = "".join(f"<tr><td>{label}</td><td>{n}</td><td>{shown(metrics[k])}</td></tr>" for k, n in names if k in metrics)
     loops = metrics.get("loop_closure", {})
-    rows += "".join(f"<tr><td>{label}</td><td>loop closures: {k.replace('_', ' ')}</td><td>{v:.6g}</td></tr>"
+    rows += "".join(f"<tr><td>{label}</td><td>loop closures: {k.replace('_', ' ')}</td><td>{shown(v)}</td></tr>"
                     for k, v in loops.items())
     return rows
 
