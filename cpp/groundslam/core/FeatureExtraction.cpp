@@ -1,5 +1,8 @@
 #include "groundslam/core/FeatureExtraction.hpp"
 
+#include <algorithm>
+#include <cmath>
+
 #include <opencv2/imgproc.hpp>
 
 namespace groundslam {
@@ -31,16 +34,28 @@ ImageFeatures OrbExtractor::detect(const cv::Mat& gray_image) const {
 }
 
 GroundFeatures projectToGround(const ImageFeatures& features, const CameraModel& camera) {
+  // Each keypoint and a point a few pixels along its ORB orientation: the two ground points give the
+  // orientation on the ground, whatever the mount.
+  constexpr double kArmPx = 4.0;
   std::vector<Eigen::Vector2d> pixels;
-  pixels.reserve(features.keypoints.size());
-  for (const auto& kp : features.keypoints) pixels.emplace_back(kp.pt.x, kp.pt.y);
+  pixels.reserve(2 * features.keypoints.size());
+  for (const auto& kp : features.keypoints) {
+    const double angle = kp.angle * M_PI / 180.0;
+    pixels.emplace_back(kp.pt.x, kp.pt.y);
+    pixels.emplace_back(kp.pt.x + kArmPx * std::cos(angle), kp.pt.y + kArmPx * std::sin(angle));
+  }
   const auto points = camera.pixelsToGround(pixels);
   GroundFeatures ground;
-  ground.points.reserve(points.size());
-  for (size_t i = 0; i < points.size(); ++i) {
-    if (!points[i]) continue;
-    ground.points.push_back(*points[i]);
+  ground.points.reserve(features.keypoints.size());
+  for (size_t i = 0; i < features.keypoints.size(); ++i) {
+    const auto& p = points[2 * i];
+    const auto& arm = points[2 * i + 1];
+    if (!p || !arm) continue;
+    const Eigen::Vector2d direction = *arm - *p;
+    ground.points.push_back(*p);
     ground.descriptors.push_back(features.descriptors.row(static_cast<int>(i)));
+    ground.angles_rad.push_back(static_cast<float>(std::atan2(direction.y(), direction.x())));
+    ground.octaves.push_back(static_cast<std::uint8_t>(std::clamp(features.keypoints[i].octave, 0, 255)));
   }
   return ground;
 }
@@ -61,6 +76,10 @@ GroundFeatures dropNearTwins(const GroundFeatures& features, int max_distance) {
     if (twin[static_cast<size_t>(i)]) continue;
     kept.points.push_back(features.points[static_cast<size_t>(i)]);
     kept.descriptors.push_back(features.descriptors.row(i));
+    if (features.hasOrientations()) {
+      kept.angles_rad.push_back(features.angles_rad[static_cast<size_t>(i)]);
+      kept.octaves.push_back(features.octaves[static_cast<size_t>(i)]);
+    }
   }
   return kept;
 }

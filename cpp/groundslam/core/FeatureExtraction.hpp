@@ -1,6 +1,7 @@
 #pragma once
 // Paper §III-A: ORB keypoints and descriptors, projected to metric points on the ground plane.
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -30,10 +31,15 @@ struct ImageFeatures {
   cv::Mat descriptors;  ///< CV_8U, 32 bytes per row
 };
 
-/// Ground points in the robot frame (metres) with their descriptors (row i describes point i).
+/// Ground points in the robot frame (metres) with their descriptors (row i describes point i). Features
+/// projected from an image also carry their orientation on the ground and pyramid octave (what global
+/// localization votes with); sets built otherwise may leave those two empty.
 struct GroundFeatures {
   std::vector<Eigen::Vector2d> points;
   cv::Mat descriptors;
+  std::vector<float> angles_rad;       ///< ORB orientation as a direction on the ground, robot frame
+  std::vector<std::uint8_t> octaves;   ///< ORB pyramid level
+  bool hasOrientations() const { return angles_rad.size() == points.size() && octaves.size() == points.size(); }
   size_t size() const { return points.size(); }
 };
 

@@ -1,5 +1,8 @@
 #include "groundslam/sim/Simulator.hpp"
 
+#include <stdexcept>
+#include <string>
+
 #include <algorithm>
 #include <cmath>
 
@@ -67,6 +70,15 @@ GroundTexture SequenceSimulator::layTexture(const cv::Mat& user_texture) const {
   }
   const double margin = footprintRadius();
   x_min -= margin, x_max += margin, y_min -= margin, y_max += margin;
+  if (settings_.ground_seed) {
+    const double half = 0.5 * settings_.ground_size_m;
+    if (x_min < -half || x_max > half || y_min < -half || y_max > half) {
+      throw std::invalid_argument("the path leaves the ground square of " + std::to_string(settings_.ground_size_m) +
+                                  " m around the origin; make the ground larger");
+    }
+    x_min = y_min = -half;
+    x_max = y_max = half;
+  }
   GroundTexture texture;
   if (!user_texture.empty()) {
     user_texture.convertTo(texture.albedo, CV_32F, 1.0 / 255.0);
@@ -85,7 +97,7 @@ GroundTexture SequenceSimulator::layTexture(const cv::Mat& user_texture) const {
                       static_cast<int>(std::ceil((y_max - y_min) / texture.texel_m)));
   TextureKind kind = TextureKind::asphalt;
   parseTextureKind(settings_.texture_kind, kind);
-  texture.albedo = generateAlbedo(kind, size, texture.texel_m, settings_.seed);
+  texture.albedo = generateAlbedo(kind, size, texture.texel_m, settings_.ground_seed.value_or(settings_.seed));
   return texture;
 }
 

@@ -3,6 +3,7 @@
 // ground truth. Deterministic for a seed. No file I/O: the application writes what it renders.
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -32,6 +33,11 @@ struct SimulationSettings {
   double wet_after = 1.0;                ///< fraction of the path after which the ground is wet (1 = never)
   PhotometricSettings photometry;
   std::uint64_t seed = 1;
+  /// When set, the ground is this seed's texture laid over a fixed square of `ground_size_m` centred on the
+  /// world origin, whatever the path: sessions with other paths and seeds see the same ground where they
+  /// overlap (a second session over a mapped floor). Unset: the texture covers the path, from `seed`.
+  std::optional<std::uint64_t> ground_seed;
+  double ground_size_m = 2.0;
 };
 
 class SequenceSimulator {

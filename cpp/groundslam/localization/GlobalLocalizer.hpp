@@ -1,0 +1,62 @@
+#pragma once
+// Global localization on a feature map, with no pose prior (Micro-GPS's idea on our ORB map): every query
+// feature and every map feature sharing its visual word propose a full robot pose,
+// T_map_robot = T_map_feature * T_robot_feature^-1, from the two positions and ORB orientations. The votes
+// land in a sparse (x, y, theta) grid; the strongest peaks are verified by the robust SE(2) fit of their
+// correspondences, then by guided re-matching against every map feature in the predicted footprint. A peak
+// is accepted only when the map confirms it clearly better than any other verified pose (on tiles, the
+// runner-up sits one period away), with enough inliers spread over the image and a tight covariance.
+
+#include <optional>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "groundslam/core/FeatureExtraction.hpp"
+#include "groundslam/core/Pose2.hpp"
+#include "groundslam/core/RigidFit.hpp"
+#include "groundslam/localization/FeatureMap.hpp"
+
+namespace groundslam {
+
+struct LocalizationSettings {
+  double cell_m = 0.01;              ///< vote cell size in x and y
+  double cell_deg = 6.0;             ///< vote cell size in heading
+  int max_hamming = 64;              ///< a map feature votes only when its descriptor is this close, bits
+  int max_postings = 400;            ///< words with more map features than this are too common to vote
+  int max_peaks = 4;                 ///< peaks verified, strongest first
+  int min_votes = 8;                 ///< a peak with fewer votes is not verified
+  double max_rival_ratio = 0.8;      ///< inliers of the best rival pose / the winner's, at most
+  int min_inliers = 30;              ///< after guided re-matching
+  double max_covariance_score = -4.0;  ///< log10 of the largest eigenvalue of the fit's covariance
+  double min_spread = 0.25;          ///< inliers must span this fraction of the query features' extent (both axes)
+  double match_radius_m = 0.004;     ///< guided re-matching radius around the predicted position
+  double ratio = 0.8;                ///< ratio test of the guided re-matching
+  double footprint_radius_m = 0.25;  ///< map anchors this close to the predicted pose supply the re-matching
+};
+
+enum class LocalizationStatus { localized, too_few_votes, ambiguous, too_few_inliers, covariance, clustered };
+const char* localizationStatusName(LocalizationStatus status);
+
+struct Localization {
+  LocalizationStatus status = LocalizationStatus::too_few_votes;
+  Pose2 T_map_robot;
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Identity();  ///< of T_map_robot (x, y, theta)
+  int votes = 0;            ///< the winning peak's votes (its neighbourhood)
+  int runner_up_inliers = 0;  ///< inliers of the best verified pose away from the winner
+  int inliers = 0;
+  int anchor = -1;          ///< the map anchor nearest the pose (for a graph edge)
+  Pose2 T_anchor_robot;     ///< the pose relative to that anchor
+  Eigen::Matrix3d anchor_covariance = Eigen::Matrix3d::Identity();  ///< of T_anchor_robot
+  bool ok() const { return status == LocalizationStatus::localized; }
+};
+
+/// Which anchors may vote: e.g. only those of segments other than the lost one.
+using AnchorFilter = std::vector<bool>;
+
+/// Localizes features seen by the robot (robot frame, with orientations) on the map. `usable`, when not
+/// empty, says per anchor whether its features may vote. Failure is a status, never an exception.
+Localization localizeGlobally(const FeatureMap& map, const GroundFeatures& query, const LocalizationSettings& settings,
+                              const FitSettings& fitting, const AnchorFilter& usable = {});
+
+}  // namespace groundslam
