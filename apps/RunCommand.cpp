@@ -123,11 +123,11 @@ RunProgress runInto(const std::string& folder, const RunOptions& o, const Datase
   writeNewFile(file("frames.csv"), formatFramesCsv(results, load_ms));
   writeNewFile(file("loop_closures.csv"), formatLoopClosuresCsv(slam.loopCandidates()));
   writeNewFile(file("graph.g2o"), formatG2o(slam.graph()));
-  const int fallbacks = countFallbacks(results);
-  std::cout << "processed " << results.size() << " of " << dataset.frames.size() << " frames: "
-            << static_cast<int>(results.size()) - fallbacks << " measured, " << fallbacks
-            << " with fallback odometry (pose assumed from earlier motion), " << countLoopClosures(results)
-            << " loop closures\n";
+  const auto measured = std::count_if(trajectory.begin(), trajectory.end(), [](const StampedPose& p) { return p.measured; });
+  std::cout << "processed " << results.size() << " of " << dataset.frames.size() << " frames: " << measured << " measured, "
+            << countStatus(results, "fallback") << " with fallback odometry (pose assumed from earlier motion), "
+            << countStatus(results, "lost") << " lost (tracking lost, not yet relocalized), " << countStatus(results, "relocalized")
+            << " relocalizations, " << countLoopClosures(results) << " loop closures\n";
   std::vector<std::optional<CandidateTruth>> truths;
   const Trajectory groundtruth = dataset.hasGroundTruth() ? groundTruthOf(dataset, config) : Trajectory{};
   if (dataset.hasGroundTruth() && groundtruth.empty()) {

@@ -42,9 +42,9 @@ std::string defaultVocabularyPath() {
   return GROUNDSLAM_DEFAULT_VOCABULARY;
 }
 
-int countFallbacks(const std::vector<FrameResult>& results) {
+int countStatus(const std::vector<FrameResult>& results, const std::string& prefix) {
   int count = 0;
-  for (const auto& r : results) count += r.status.rfind("fallback", 0) == 0 ? 1 : 0;
+  for (const auto& r : results) count += r.status.rfind(prefix, 0) == 0 ? 1 : 0;
   return count;
 }
 

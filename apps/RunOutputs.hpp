@@ -11,7 +11,8 @@ namespace groundslam::apps {
 
 /// `frames.csv`: index,timestamp,keypoints,matches,inliers,status, then per-stage milliseconds, total_ms.
 std::string formatFramesCsv(const std::vector<FrameResult>& results, const std::vector<double>& load_ms);
-int countFallbacks(const std::vector<FrameResult>& results);
+/// Frames whose status starts with `prefix` ("fallback", "lost", "relocalized").
+int countStatus(const std::vector<FrameResult>& results, const std::string& prefix);
 int countLoopClosures(const std::vector<FrameResult>& results);
 /// `metrics.json`: the trajectory metrics with the loop-closure metrics under "loop_closure".
 std::string runMetricsJson(const TrajectoryMetrics& trajectory, const LoopClosureMetrics& loops);

@@ -30,8 +30,21 @@ struct SimulateOptions {
   std::vector<double> distortion;
   double fx = 0.0, fy = 0.0, cx = 0.0, cy = 0.0;
   double turn_deg = sim::PathSettings{}.max_turn_rad * 180.0 / M_PI;
+  std::vector<std::string> gaps;  ///< FROM:TO ranges of path frames that are not written (a carried robot)
+  std::uint64_t ground_seed = 0;  ///< 0: the ground follows --seed and covers the path only
   sim::SimulationSettings settings;
 };
+
+/// The path frames a FROM:TO gap leaves out: FROM <= i < TO.
+std::pair<int, int> parseGap(const std::string& text) {
+  int from = 0, to = 0;
+  char colon = 0;
+  std::istringstream in(text);
+  if (!(in >> from >> colon >> to) || colon != ':' || from < 0 || to <= from) {
+    throw InputError("--gap: expected FROM:TO with 0 <= FROM < TO (path frames left out), got '" + text + "'");
+  }
+  return {from, to};
+}
 
 cv::Size parseResolution(const std::string& text) {
   int w = 0, h = 0;
@@ -56,6 +69,7 @@ sim::SimulationSettings resolveSettings(SimulateOptions& o) {
     std::copy(o.distortion.begin(), o.distortion.end(), s.camera.distortion.begin());
   }
   if (!sim::parsePathKind(o.path_kind, s.path.kind)) throw InputError("--path: unknown path '" + o.path_kind + "'");
+  if (o.ground_seed != 0) s.ground_seed = o.ground_seed;
   s.path.max_turn_rad = o.turn_deg * M_PI / 180.0;
   if (s.path.lane_spacing_m <= 0.0) {
     // Lanes overlap by 40% of the footprint's short side, so the robot revisits ground in the opposite heading.
@@ -77,7 +91,9 @@ std::string describe(const sim::SimulationSettings& s, const SimulateOptions& o)
       << "\nwet_after: " << s.wet_after << "\nnoise_sigma: " << s.photometry.noise_sigma
       << "\ndefocus_sigma_px: " << s.photometry.defocus_sigma_px
       << "\nexposure_variation: " << s.photometry.exposure_variation << "\nvignetting: " << s.photometry.vignetting
-      << "\nseed: " << s.seed << "\n";
+      << "\nseed: " << s.seed << "\nground_seed: " << o.ground_seed << "\nground_size_m: " << s.ground_size_m << "\ngaps: [";
+  for (size_t i = 0; i < o.gaps.size(); ++i) out << (i ? ", " : "") << "'" << o.gaps[i] << "'";
+  out << "]\n";
   return out.str();
 }
 
@@ -102,8 +118,12 @@ void simulate(SimulateOptions& o) {
   std::vector<std::string> images;
   std::vector<Eigen::Matrix3d> homographies;
   std::vector<StampedPose> groundtruth;
+  std::vector<std::pair<int, int>> gaps;
+  for (const std::string& gap : o.gaps) gaps.push_back(parseGap(gap));
+  const auto inGap = [&](int i) { return std::any_of(gaps.begin(), gaps.end(), [&](const auto& g) { return i >= g.first && i < g.second; }); };
   Progress progress("simulate", simulator.frameCount());
   for (int i = 0; i < simulator.frameCount(); ++i) {
+    if (inGap(i)) continue;
     char name[32];
     std::snprintf(name, sizeof(name), "images/%06d.png", i);
     const std::string path = (fs::path(o.out_dir) / name).string();
@@ -111,7 +131,7 @@ void simulate(SimulateOptions& o) {
     const Pose2& pose = simulator.groundTruth()[static_cast<size_t>(i)];
     images.push_back(name);
     homographies.push_back(mapHomographyFromRobotPose(pose, settings.camera, meters_per_pixel));
-    groundtruth.push_back({static_cast<double>(i), pose});
+    groundtruth.push_back({static_cast<double>(images.size() - 1), pose});  // timestamps are list indices
     progress.update(i + 1);
   }
   progress.finish();
@@ -121,7 +141,7 @@ void simulate(SimulateOptions& o) {
   // The list goes last: a sequence without its list is visibly incomplete.
   const std::string list = (fs::path(o.out_dir) / (o.name + ".txt")).string();
   writeFileAtomically(list, formatHdGroundList(images, homographies));
-  std::cout << "simulated " << simulator.frameCount() << " frames (" << o.settings.texture_kind << ", "
+  std::cout << "simulated " << images.size() << " frames (" << (o.texture_image.empty() ? o.settings.texture_kind : o.texture_image) << ", "
             << o.path_kind << ") -> " << list << "\n";
 }
 
@@ -167,6 +187,13 @@ void addSimulateCommand(CLI::App& app) {
   cmd->add_option("--wet-after", o->settings.wet_after, "Fraction of the path after which the ground is wet (1: never)")
       ->check(CLI::Range(0.0, 1.0))->capture_default_str();
   cmd->add_option("--seed", o->settings.seed, "Seed of every random choice")->capture_default_str();
+  cmd->add_option("--ground-seed", o->ground_seed,
+                  "Lay the ground from this seed over a fixed square around the origin: sessions with other paths, seeds and "
+                  "looks see the same floor (0: the ground follows --seed)")
+      ->capture_default_str();
+  cmd->add_option("--ground-size-m", o->settings.ground_size_m, "With --ground-seed: side of the ground square")
+      ->check(CLI::Range(0.1, 20.0))->capture_default_str();
+  cmd->add_option("--gap", o->gaps, "FROM:TO: leave out path frames FROM <= i < TO (the robot is carried; repeatable)");
   cmd->callback([o]() { simulate(*o); });
 }
 

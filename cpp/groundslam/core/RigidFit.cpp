@@ -87,8 +87,13 @@ struct RansacResult {
 };
 
 /// True when two transforms are different explanations, not the same one seen through noise.
-bool farApart(const Pose2& a, const Pose2& b) {
-  return (a.translation() - b.translation()).norm() > 0.01 || std::abs(wrapAngle(a.theta - b.theta)) > 3.0 * M_PI / 180.0;
+bool farApart(const Pose2& a, const Pose2& b, const FitSettings& settings) {
+  const double rotation = std::abs(wrapAngle(a.theta - b.theta));
+  if (settings.rival_max_rotation_rad) {
+    // Only shifted copies count: a repetition of the floor, not the best pose turned about a matched point.
+    return rotation <= *settings.rival_max_rotation_rad && (a.translation() - b.translation()).norm() > 0.01;
+  }
+  return (a.translation() - b.translation()).norm() > 0.01 || rotation > 3.0 * M_PI / 180.0;
 }
 
 /// 2-point RANSAC: the hypothesis with the most inliers. Stops early once the inlier ratio makes a
@@ -127,7 +132,7 @@ RansacResult ransac(const std::vector<Eigen::Vector2d>& target, const std::vecto
     needed = std::min(settings.ransac_iterations, static_cast<int>(std::ceil(std::log(1e-3) / std::log(miss))) + 1);
   }
   for (const Hypothesis& h : tried) {
-    if (farApart(h.T, result.best)) result.rival_support = std::max(result.rival_support, h.support);
+    if (farApart(h.T, result.best, settings)) result.rival_support = std::max(result.rival_support, h.support);
   }
   return result;
 }
@@ -156,6 +161,7 @@ const char* fitStatusName(FitStatus status) {
     case FitStatus::too_few_inliers: return "too_few_inliers";
     case FitStatus::degenerate: return "degenerate";
     case FitStatus::solver_failed: return "solver_failed";
+    case FitStatus::ambiguous: return "ambiguous";
   }
   return "unknown";
 }

@@ -22,6 +22,9 @@ struct FitSettings {
   int ransac_iterations = 200;   ///< most RANSAC hypotheses (fewer when the inlier ratio allows)
   int seed = 42;                 ///< seed of the RANSAC sampler
   bool measure_ambiguity = false;  ///< run every RANSAC hypothesis and report the best rival transform's support
+  /// When set, a rival must be shifted by over 1 cm with a rotation within this (a repetition of the floor);
+  /// unset, any transform over 1 cm or 3 degrees away is a rival.
+  std::optional<double> rival_max_rotation_rad;
 };
 
 /// What is already believed about the transform: RANSAC then only considers hypotheses within the window.
@@ -32,7 +35,8 @@ struct TransformPrior {
   double radius_rad = 0.0;  ///< largest rotation difference considered
 };
 
-enum class FitStatus { ok, too_few_matches, too_few_inliers, degenerate, solver_failed };
+/// `ambiguous`: set by callers that refuse a fit another transform explains almost as well (repetitive floors).
+enum class FitStatus { ok, too_few_matches, too_few_inliers, degenerate, solver_failed, ambiguous };
 const char* fitStatusName(FitStatus status);
 
 struct RigidEstimate {

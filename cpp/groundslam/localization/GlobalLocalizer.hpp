@@ -33,6 +33,9 @@ struct LocalizationSettings {
   double match_radius_m = 0.004;     ///< guided re-matching radius around the predicted position
   double ratio = 0.8;                ///< ratio test of the guided re-matching
   double footprint_radius_m = 0.25;  ///< map anchors this close to the predicted pose supply the re-matching
+  /// A relocalization while lost is accepted when two localizations agree with odometry within these.
+  double max_odometry_disagreement_m = 0.01;
+  double max_odometry_disagreement_rad = 0.035;
 };
 
 enum class LocalizationStatus { localized, too_few_votes, ambiguous, too_few_inliers, covariance, clustered };

@@ -14,6 +14,7 @@
 #include "groundslam/core/Matching.hpp"
 #include "groundslam/core/PoseGraph.hpp"
 #include "groundslam/core/RigidFit.hpp"
+#include "groundslam/localization/GlobalLocalizer.hpp"
 #include "groundslam/pipeline/LoopClosure.hpp"
 
 namespace groundslam {
@@ -52,14 +53,21 @@ struct GraphConfig {
   PoseGraphSettings solver;
 };
 
+/// Checks on an odometry fit beyond the fit's own success.
+struct OdometryChecks {
+  double max_ambiguity = 0.5;  ///< a rival transform with this share of the fit's inliers makes the motion unknown
+};
+
 struct Config {
   CameraConfig camera;
   DatasetConfig dataset;
   OrbSettings features;
   MatcherSettings matching;
   FitSettings odometry;
+  OdometryChecks odometry_checks;
   FallbackSettings fallback;
   LoopClosureSettings loop_closure;
+  LocalizationSettings localization;
   GraphConfig graph;
 };
 
@@ -128,6 +136,7 @@ void visitConfigFields(Config_& c, Visitor&& v) {
   v("odometry", "ransac_inlier_m", c.odometry.ransac_inlier_m, kPositive);
   v("odometry", "ransac_iterations", c.odometry.ransac_iterations, Range{1, 1000000});
   v("odometry", "seed", c.odometry.seed, kNonNegative);
+  v("odometry", "max_ambiguity", c.odometry_checks.max_ambiguity, Range{0.0, 1.0});
   v("odometry", "fallback_sigma_m", c.fallback.sigma_m, kPositive);
   v("odometry", "fallback_sigma_rad", c.fallback.sigma_rad, kPositive);
   v("loop_closure", "enabled", c.loop_closure.enabled, Range{});
@@ -150,6 +159,21 @@ void visitConfigFields(Config_& c, Visitor&& v) {
   v("loop_closure", "max_disagreement_per_m", c.loop_closure.max_disagreement_per_m, kNonNegative);
   v("loop_closure", "max_disagreement_rad", c.loop_closure.max_disagreement_rad, kPositive);
   v("loop_closure", "max_disagreement_rad_per_m", c.loop_closure.max_disagreement_rad_per_m, kNonNegative);
+  v("localization", "cell_m", c.localization.cell_m, Range{0.001, 0.1});
+  v("localization", "cell_deg", c.localization.cell_deg, Range{0.5, 45.0});
+  v("localization", "max_hamming", c.localization.max_hamming, Range{0, 256});
+  v("localization", "max_postings", c.localization.max_postings, Range{1, 1e9});
+  v("localization", "max_peaks", c.localization.max_peaks, Range{1, 100});
+  v("localization", "min_votes", c.localization.min_votes, Range{1, 1e9});
+  v("localization", "max_rival_ratio", c.localization.max_rival_ratio, Range{0.0, 1.0});
+  v("localization", "min_inliers", c.localization.min_inliers, Range{3, 1e9});
+  v("localization", "max_covariance_score", c.localization.max_covariance_score, Range{-30.0, 30.0});
+  v("localization", "min_spread", c.localization.min_spread, Range{0.0, 1.0});
+  v("localization", "match_radius_m", c.localization.match_radius_m, kPositive);
+  v("localization", "ratio", c.localization.ratio, Range{0.0, 1.0, true});
+  v("localization", "footprint_radius_m", c.localization.footprint_radius_m, kPositive);
+  v("localization", "max_odometry_disagreement_m", c.localization.max_odometry_disagreement_m, kPositive);
+  v("localization", "max_odometry_disagreement_rad", c.localization.max_odometry_disagreement_rad, kPositive);
   v("graph", "min_sigma_m", c.graph.min_sigma_m, kNonNegative);
   v("graph", "min_sigma_rad", c.graph.min_sigma_rad, kNonNegative);
   v("graph", "optimise_every_frames", c.graph.optimise_every_frames, Range{1, 1e9});

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <limits>
 
+#include <Eigen/Eigenvalues>
+
 namespace groundslam {
 namespace {
 
@@ -42,16 +44,20 @@ const char* loopGateName(LoopGate gate) {
 }
 
 LoopCloser::LoopCloser(const LoopClosureSettings& settings, std::shared_ptr<const Vocabulary> vocabulary,
-                       const MatcherSettings& matching, const FitSettings& fitting)
+                       const MatcherSettings& matching, const FitSettings& fitting, const LocalizationSettings& localization)
     : settings_(settings),
+      localization_(localization),
       vocabulary_(std::move(vocabulary)),
+      feature_map_(vocabulary_),
       matching_ratio_(matching.ratio),
       fitting_(fitting) {
   fitting_.measure_ambiguity = true;
   fitting_.min_inliers = settings.min_inliers;
 }
 
-std::vector<LoopCandidate> LoopCloser::process(int frame, const GroundFeatures& features, const std::vector<Pose2>& estimates) {
+std::vector<LoopCandidate> LoopCloser::process(int frame, int segment, const GroundFeatures& features,
+                                               const std::vector<Pose2>& estimates) {
+  segment_of_frame_.push_back(segment);
   BowVector bow = vocabulary_->transform(features.descriptors);
   const double step = frame > 0 ? (estimates[static_cast<size_t>(frame)].translation() -
                                    estimates[static_cast<size_t>(frame) - 1].translation()).norm()
@@ -102,6 +108,8 @@ void LoopCloser::admitPlaces(int frame, const std::vector<Pose2>& estimates) {
     const Eigen::Vector2d position = estimates[static_cast<size_t>(entering.frame)].translation();
     if (!places_.covers(position, settings_.place_spacing_m, estimates)) {
       places_.add(entering.frame, entering.features, std::move(entering.bow), estimates);
+      feature_map_.addAnchor(entering.frame, estimates[static_cast<size_t>(entering.frame)], segmentOf(entering.frame),
+                             entering.features);
     }
     pending_.pop_front();
   }
@@ -114,6 +122,7 @@ std::vector<BowMatch> LoopCloser::selectCandidates(int frame, const BowVector& b
   std::vector<BowMatch> nearby;
   for (const int a : places_.framesNear(here, settings_.max_search_radius_m, estimates)) {
     if (static_cast<int>(nearby.size()) >= settings_.max_nearby_places) break;
+    if (segmentOf(a) != segmentOf(frame)) continue;  // drift across a tracking loss is unknown
     const double reach = settings_.search_radius_m + settings_.max_disagreement_m +
                          settings_.max_disagreement_per_m * driftPathLength(a, frame);
     if ((estimates[static_cast<size_t>(a)].translation() - here).norm() <= reach) {
@@ -128,7 +137,7 @@ std::vector<BowMatch> LoopCloser::selectCandidates(int frame, const BowVector& b
   for (const BowMatch& global : places_.query(bow, static_cast<int>(wanted))) {
     if (nearby.size() >= wanted) break;
     const bool chosen = std::any_of(nearby.begin(), nearby.end(), [&](const BowMatch& m) { return m.frame == global.frame; });
-    if (!chosen) nearby.push_back(global);
+    if (!chosen && segmentOf(global.frame) == segmentOf(frame)) nearby.push_back(global);
   }
   return nearby;
 }
@@ -199,6 +208,63 @@ LoopCandidate LoopCloser::verify(int frame_a, const GroundFeatures& a, int frame
     candidate.rejected_by = LoopGate::ambiguous;
   }
   return candidate;
+}
+
+void LoopCloser::mapMoved(const std::vector<Pose2>& estimates, int first_moved) {
+  places_.refile(estimates, first_moved);
+  const auto& anchors = feature_map_.anchors();
+  const auto first = std::partition_point(anchors.begin(), anchors.end(), [&](const MapAnchor& a) { return a.frame < first_moved; });
+  for (auto anchor = first; anchor != anchors.end(); ++anchor) {
+    const auto index = static_cast<int>(anchor - anchors.begin());
+    feature_map_.moveAnchor(index, estimates[static_cast<size_t>(anchor->frame)]);
+  }
+}
+
+LoopCandidate LoopCloser::candidateFrom(const Localization& localization, int frame) const {
+  LoopCandidate candidate;
+  candidate.frame_a = feature_map_.anchors()[static_cast<size_t>(localization.anchor)].frame;
+  candidate.frame_b = frame;
+  candidate.bow_score = std::nan("");
+  candidate.matches = localization.votes;
+  candidate.inliers = localization.inliers;
+  candidate.T_a_b = localization.T_anchor_robot;
+  candidate.covariance = localization.anchor_covariance;
+  candidate.covariance_score = std::log10(Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(localization.covariance).eigenvalues().maxCoeff());
+  candidate.ambiguity = localization.inliers > 0 ? static_cast<double>(localization.runner_up_inliers) / localization.inliers : 1.0;
+  candidate.rejected_by = LoopGate::none;
+  return candidate;
+}
+
+std::vector<LoopCandidate> LoopCloser::relocalize(int frame, const GroundFeatures& features, const std::vector<Pose2>& estimates) {
+  const int lost_segment = segmentOf(frame);
+  AnchorFilter usable(feature_map_.anchors().size());
+  for (size_t a = 0; a < usable.size(); ++a) usable[a] = feature_map_.anchors()[a].segment != lost_segment;
+  const Localization localization = localizeGlobally(feature_map_, features, localization_, fitting_, usable);
+  if (!localization.ok()) return {};
+  // One localization could be a lookalike; the next must agree with what odometry measured in between.
+  if (!pending_localization_ || segmentOf(pending_localization_->frame) != lost_segment) {
+    pending_localization_ = PendingLocalization{frame, localization};
+    return {};
+  }
+  const PendingLocalization earlier = *pending_localization_;
+  const Pose2 by_localization = between(earlier.localization.T_map_robot, localization.T_map_robot);
+  const Pose2 by_odometry = between(estimates[static_cast<size_t>(earlier.frame)], estimates[static_cast<size_t>(frame)]);
+  const Pose2 disagreement = by_odometry.inverse() * by_localization;
+  if (disagreement.translation().norm() > localization_.max_odometry_disagreement_m ||
+      std::abs(disagreement.theta) > localization_.max_odometry_disagreement_rad) {
+    pending_localization_ = PendingLocalization{frame, localization};
+    return {};
+  }
+  pending_localization_.reset();
+  const int map_segment = feature_map_.anchors()[static_cast<size_t>(localization.anchor)].segment;
+  for (int& segment : segment_of_frame_) {
+    if (segment == lost_segment) segment = map_segment;
+  }
+  feature_map_.mergeSegment(lost_segment, map_segment);
+  std::vector<LoopCandidate> joined = {candidateFrom(earlier.localization, earlier.frame), candidateFrom(localization, frame)};
+  recent_loops_.emplace_back(joined.back().frame_a, frame);
+  if (recent_loops_.size() > kRecentLoops) recent_loops_.pop_front();
+  return joined;
 }
 
 }  // namespace groundslam

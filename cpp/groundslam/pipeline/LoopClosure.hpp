@@ -6,6 +6,7 @@
 
 #include <deque>
 #include <memory>
+#include <optional>
 #include <string>
 #include <cmath>
 #include <vector>
@@ -19,6 +20,8 @@
 #include "groundslam/core/FeatureExtraction.hpp"
 #include "groundslam/core/Matching.hpp"
 #include "groundslam/core/RigidFit.hpp"
+#include "groundslam/localization/FeatureMap.hpp"
+#include "groundslam/localization/GlobalLocalizer.hpp"
 #include "groundslam/pipeline/PlaceMap.hpp"
 
 namespace groundslam {
@@ -71,21 +74,30 @@ struct LoopCandidate {
 class LoopCloser {
  public:
   LoopCloser(const LoopClosureSettings& settings, std::shared_ptr<const Vocabulary> vocabulary,
-             const MatcherSettings& matching, const FitSettings& fitting);
+             const MatcherSettings& matching, const FitSettings& fitting, const LocalizationSettings& localization);
 
   /// Verifies frame `frame`'s candidates against the database, then lets frame - k into it. `estimates`
-  /// holds the current pose estimate of every frame up to this one. Returns every candidate verified.
-  std::vector<LoopCandidate> process(int frame, const GroundFeatures& features, const std::vector<Pose2>& estimates);
+  /// holds the current pose estimate of every frame up to this one; `segment` is the frame's tracking
+  /// segment (a new one starts when tracking is lost; prior-guided candidates never cross segments, whose
+  /// relative drift is unknown). Returns every candidate verified.
+  std::vector<LoopCandidate> process(int frame, int segment, const GroundFeatures& features, const std::vector<Pose2>& estimates);
+  /// While tracking is lost: localizes the frame globally on the map of the other segments (no prior). A
+  /// localization is accepted when the next one agrees with odometry; then both are returned as loop
+  /// candidates (frame_a: the map keyframe, frame_b: the lost frame) and the frame's segment joins the map's.
+  std::vector<LoopCandidate> relocalize(int frame, const GroundFeatures& features, const std::vector<Pose2>& estimates);
+  /// The segment a relocalization joined the lost segment to (valid after relocalize returned candidates).
+  int segmentOf(int frame) const { return segment_of_frame_[static_cast<size_t>(frame)]; }
   /// Re-files the places of frames from `first_moved` on under their current estimates, after an
   /// optimisation moved them.
-  void mapMoved(const std::vector<Pose2>& estimates, int first_moved) { places_.refile(estimates, first_moved); }
+  void mapMoved(const std::vector<Pose2>& estimates, int first_moved);
   const PlaceMap& places() const { return places_; }
+  const FeatureMap& featureMap() const { return feature_map_; }
 
  private:
   /// A frame waiting its k frames before it may become a place.
   struct Pending {
     int frame = 0;
-    GroundFeatures features;
+    GroundFeatures features;  ///< with orientations, for the feature map
     BowVector bow;
   };
   /// False while the search rests after an accepted loop closure (loop_spacing_m).
@@ -103,8 +115,19 @@ class LoopCloser {
   /// one of the recent loop closures, whichever is shortest.
   double driftPathLength(int frame_a, int frame_b) const;
 
+  /// A localization of a lost frame, waiting for the next one to agree with odometry.
+  struct PendingLocalization {
+    int frame = 0;
+    Localization localization;
+  };
+  LoopCandidate candidateFrom(const Localization& localization, int frame) const;
+
   LoopClosureSettings settings_;
+  LocalizationSettings localization_;
   std::shared_ptr<const Vocabulary> vocabulary_;
+  FeatureMap feature_map_;
+  std::vector<int> segment_of_frame_;
+  std::optional<PendingLocalization> pending_localization_;
   double matching_ratio_;
   FitSettings fitting_;
   PlaceMap places_;

@@ -23,11 +23,14 @@ std::pair<std::vector<Eigen::Vector2d>, std::vector<Eigen::Vector2d>> matchedPoi
 
 Slam::Slam(const Config& config, std::shared_ptr<const Vocabulary> vocabulary)
     : config_((validateConfig(config), config)),
+      odometry_fitting_(config.odometry),
       preparer_(config),
       matcher_(config.matching),
       graph_(config.graph.solver) {
+  odometry_fitting_.measure_ambiguity = true;
+  odometry_fitting_.rival_max_rotation_rad = 1.0 * M_PI / 180.0;
   if (config.loop_closure.enabled && vocabulary && !vocabulary->empty()) {
-    loop_closer_.emplace(config.loop_closure, std::move(vocabulary), config.matching, config.odometry);
+    loop_closer_.emplace(config.loop_closure, std::move(vocabulary), config.matching, config.odometry, config.localization);
   }
 }
 
@@ -48,9 +51,13 @@ FrameResult Slam::process(PreparedFrame prepared) {
   if (previous_) {
     const OdometryEdge odometry = estimateOdometry(*previous_, current, result);
     if (!odometry.fallback) last_good_odometry_ = odometry;
-    addToGraph(odometry);
-    result.status = odometry.fallback ? std::string("fallback_") + fitStatusName(odometry.fit_status) : "ok";
-    measured_.push_back(!odometry.fallback);
+    if (odometry.fallback && loop_closer_) {
+      startSegment(odometry);  // tracking lost: the motion is unknown, global localization will find the pose
+    } else {
+      addToGraph(odometry);
+    }
+    result.status = lost_ ? "lost" : odometry.fallback ? std::string("fallback_") + fitStatusName(odometry.fit_status) : "ok";
+    measured_.push_back(!odometry.fallback && !lost_);
   } else {
     graph_.addPose(Pose2());
     result.status = "first";
@@ -59,6 +66,7 @@ FrameResult Slam::process(PreparedFrame prepared) {
 
   // §III-C: loop closures through the three gates become graph edges; the graph is optimised (LM).
   closeLoops(current, result);
+  if (lost_) relocalize(current, result);
   optimiseIfDue(result, false);
 
   result.T_world_robot = graph_.poses().back();
@@ -79,10 +87,42 @@ void Slam::addToGraph(const OdometryEdge& odometry) {
                   informationFrom(odometry.covariance, config_.graph.min_sigma_m, config_.graph.min_sigma_rad), false});
 }
 
+void Slam::startSegment(const OdometryEdge& failed) {
+  // An edge with next to no information keeps the graph connected (and the new segment's frame defined)
+  // without pretending the motion is known; the relocalization edge will decide where the segment lies.
+  const int from = static_cast<int>(graph_.poses().size()) - 1;
+  const int to = graph_.addPose(graph_.poses().back() * failed.T_prev_curr);
+  graph_.addEdge({from, to, failed.T_prev_curr, Eigen::Vector3d(1e-4, 1e-4, 1e-4).asDiagonal(), false});
+  ++segment_;
+  lost_ = true;
+  lost_since_ = to;
+}
+
+void Slam::relocalize(const Keyframe& current, FrameResult& result) {
+  StageTimer timer;
+  const std::vector<LoopCandidate> joined = loop_closer_->relocalize(current.index, current.features, graph_.poses());
+  result.times.loop_ms += timer.lap();
+  if (joined.empty()) return;
+  for (const LoopCandidate& candidate : joined) {
+    candidates_.push_back(candidate);
+    graph_.addEdge({candidate.frame_a, candidate.frame_b, candidate.T_a_b,
+                    informationFrom(candidate.covariance, config_.graph.min_sigma_m, config_.graph.min_sigma_rad), true});
+    ++result.loop_closures;
+  }
+  // The frames since the loss snap into place: the whole graph is optimised now.
+  segment_ = loop_closer_->segmentOf(current.index);
+  for (size_t i = static_cast<size_t>(lost_since_); i < measured_.size(); ++i) measured_[i] = true;
+  lost_ = false;
+  result.status = "relocalized";
+  ++unoptimised_loops_;
+  full_optimisation_due_ = true;
+  optimise_now_ = true;
+}
+
 void Slam::closeLoops(const Keyframe& current, FrameResult& result) {
   if (!loop_closer_) return;
   StageTimer timer;
-  for (const LoopCandidate& candidate : loop_closer_->process(current.index, current.features, graph_.poses())) {
+  for (const LoopCandidate& candidate : loop_closer_->process(current.index, segment_, current.features, graph_.poses())) {
     candidates_.push_back(candidate);
     if (!candidate.accepted()) continue;
     graph_.addEdge({candidate.frame_a, candidate.frame_b, candidate.T_a_b,
@@ -98,9 +138,10 @@ void Slam::optimiseIfDue(FrameResult& result, bool at_end) {
   const int frame = static_cast<int>(graph_.poses().size()) - 1;
   if (at_end) {
     if (unoptimised_loops_ == 0 && !window_solved_) return;
-  } else if (unoptimised_loops_ == 0 || frame - last_optimised_frame_ < config_.graph.optimise_every_frames) {
+  } else if (!optimise_now_ && (unoptimised_loops_ == 0 || frame - last_optimised_frame_ < config_.graph.optimise_every_frames)) {
     return;
   }
+  optimise_now_ = false;
   // Usually only the recent window moves, held to the fixed map by its loop edges: the cost stays flat. A
   // loop around a long path spreads its correction over the whole path, as does the end of the run.
   StageTimer timer;
@@ -127,7 +168,7 @@ OdometryEdge Slam::estimateOdometry(const Keyframe& previous, const Keyframe& cu
     matches = matchNearby(current.features, previous.features, last_good_odometry_->T_prev_curr, radius, config_.matching.ratio);
     result.times.match_ms = timer.lap();
     const auto [previous_points, current_points] = matchedPoints(matches, current.features, previous.features);
-    fit = fitRigidTransform(previous_points, current_points, config_.odometry);
+    fit = fitRigidTransform(previous_points, current_points, odometry_fitting_);
     result.times.fit_ms = timer.lap();
   }
   // Without a prediction, or when the robot changed its motion more than the radius allows: brute force.
@@ -135,11 +176,14 @@ OdometryEdge Slam::estimateOdometry(const Keyframe& previous, const Keyframe& cu
     matches = matcher_.match(current.features.descriptors, previous.features.descriptors);
     result.times.match_ms += timer.lap();
     const auto [previous_points, current_points] = matchedPoints(matches, current.features, previous.features);
-    fit = fitRigidTransform(previous_points, current_points, config_.odometry);
+    fit = fitRigidTransform(previous_points, current_points, odometry_fitting_);
     result.times.fit_ms += timer.lap();
   }
   result.matches = static_cast<int>(matches.size());
   result.inliers = fit.inliers;
+  // Not in the paper: between images that do not overlap (a gap, a carried robot), a repetitive floor still
+  // matches one repetition over; such a fit has rivals nearly as good and is not a motion.
+  if (fit.ok() && fit.ambiguity() > config_.odometry_checks.max_ambiguity) fit.status = FitStatus::ambiguous;
 
   OdometryEdge edge{fit.T_target_source, fit.covariance, result.matches, fit.inliers, fit.status, false};
   return fit.ok() ? edge : fallbackOdometry(edge);

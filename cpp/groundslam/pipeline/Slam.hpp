@@ -69,10 +69,15 @@ class Slam {
   OdometryEdge estimateOdometry(const Keyframe& previous, const Keyframe& current, FrameResult& result) const;
   OdometryEdge fallbackOdometry(OdometryEdge failed) const;
   void addToGraph(const OdometryEdge& odometry);
+  /// Tracking is lost: a new segment starts, tied to the last one by an edge with almost no information.
+  void startSegment(const OdometryEdge& failed);
+  /// While lost: global localization; once it is accepted, the segment joins the map and the graph is optimised.
+  void relocalize(const Keyframe& current, FrameResult& result);
   void closeLoops(const Keyframe& current, FrameResult& result);
   void optimiseIfDue(FrameResult& result, bool at_end);
 
   Config config_;
+  FitSettings odometry_fitting_;  ///< the odometry settings, rivals measured (see odometry_checks)
   FramePreparer preparer_;
   DescriptorMatcher matcher_;
   std::optional<LoopCloser> loop_closer_;
@@ -86,6 +91,10 @@ class Slam {
   bool full_optimisation_due_ = false;  ///< a loop closure corrected the estimate by more than graph.full_optimisation_correction_m
   bool window_solved_ = false;          ///< a windowed optimisation ran since the last full one
   int last_optimised_frame_ = -1000000;
+  bool optimise_now_ = false;  ///< a relocalization joined a segment: optimise the whole graph at once
+  int segment_ = 0;            ///< the current tracking segment
+  bool lost_ = false;          ///< tracking was lost and the current segment is not yet joined to the map
+  int lost_since_ = 0;         ///< first frame of the current segment
 };
 
 }  // namespace groundslam
