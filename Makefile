@@ -1,9 +1,22 @@
-# groundslam: the two commands of the README (`make demo`, `make test`) and `make build`.
+# groundslam: the two commands of the README (`make demo`, `make test`), `make build`, and the reliability
+# checks `make test-sanitize` (AddressSanitizer + UndefinedBehaviorSanitizer) and `make fuzz` (libFuzzer).
 BUILD_DIR ?= build
 BUILD_TYPE ?= Release
 JOBS ?= $(shell nproc)
 
-.PHONY: deps configure build test demo benchmark clean
+SANITIZE_DIR ?= build-sanitize
+SANITIZE ?= address,undefined
+FUZZ_DIR ?= build-fuzz
+FUZZ_WORK ?= fuzz-work
+FUZZ_SECONDS ?= 60
+
+# A sanitizer report aborts the process (non-zero exit, so the test fails) with a stack trace. Leaks are
+# detected; tests/lsan.supp lists the third-party leaks that are suppressed and why.
+SANITIZER_ENV = ASAN_OPTIONS=halt_on_error=1:abort_on_error=1:detect_leaks=1:check_initialization_order=1 \
+	UBSAN_OPTIONS=halt_on_error=1:abort_on_error=1:print_stacktrace=1 \
+	LSAN_OPTIONS=suppressions=$(CURDIR)/tests/lsan.supp:print_suppressions=0
+
+.PHONY: deps configure build test demo benchmark clean test-sanitize fuzz-deps fuzz
 
 deps:
 	@bash scripts/install_deps.sh
@@ -20,5 +33,25 @@ test: build
 demo: build
 	@bash scripts/demo.sh $(BUILD_DIR)/groundslam
 
+# Every target built with -fsanitize=$(SANITIZE) in $(SANITIZE_DIR); every test of `make test` runs under it
+# (unit and end-to-end tests, the CLI error tests, the report test).
+test-sanitize: deps
+	@cmake -S . -B $(SANITIZE_DIR) -DCMAKE_BUILD_TYPE=$(BUILD_TYPE) -DGROUNDSLAM_SANITIZE=$(SANITIZE) \
+		-DGROUNDSLAM_BUILD_BENCHMARKS=OFF > $(SANITIZE_DIR).configure.log 2>&1 || (cat $(SANITIZE_DIR).configure.log; exit 1)
+	@cmake --build $(SANITIZE_DIR) -j $(JOBS)
+	@cd $(SANITIZE_DIR) && $(SANITIZER_ENV) ctest --output-on-failure -j $(JOBS)
+
+fuzz-deps:
+	@bash scripts/install_deps.sh --fuzz
+
+# libFuzzer targets (tests/fuzz/) built with clang in $(FUZZ_DIR), each run for FUZZ_SECONDS from the seed
+# corpus tests/data/fuzz/<target>/; new corpus entries and findings go to $(FUZZ_WORK)/<target>/.
+fuzz: fuzz-deps
+	@cmake -S . -B $(FUZZ_DIR) -DCMAKE_BUILD_TYPE=$(BUILD_TYPE) -DCMAKE_CXX_COMPILER=clang++ -DGROUNDSLAM_FUZZ=ON \
+		-DGROUNDSLAM_BUILD_TESTS=OFF -DGROUNDSLAM_BUILD_BENCHMARKS=OFF > $(FUZZ_DIR).configure.log 2>&1 || (cat $(FUZZ_DIR).configure.log; exit 1)
+	@cmake --build $(FUZZ_DIR) -j $(JOBS) --target fuzzers
+	@bash scripts/fuzz.sh $(FUZZ_DIR) $(FUZZ_SECONDS) $(FUZZ_WORK)
+
 clean:
-	rm -rf $(BUILD_DIR) $(BUILD_DIR).configure.log
+	rm -rf $(BUILD_DIR) $(BUILD_DIR).configure.log $(SANITIZE_DIR) $(SANITIZE_DIR).configure.log \
+		$(FUZZ_DIR) $(FUZZ_DIR).configure.log $(FUZZ_WORK)

@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
 # Installs groundslam's Debian 12 dependencies when they are missing. Idempotent: installs nothing
 # when every package is present, so `make build` stays fast after the first time.
+#   scripts/install_deps.sh          what `make build`, `make test` and `make demo` need
+#   scripts/install_deps.sh --fuzz   also clang and its libFuzzer runtime, for `make fuzz`
 set -euo pipefail
 
 packages=(
@@ -10,6 +12,9 @@ packages=(
   python3 python3-numpy python3-matplotlib
   chromium fonts-dejavu-core
 )
+if [ "${1:-}" = "--fuzz" ]; then
+  packages+=(clang libclang-rt-14-dev)
+fi
 
 missing=()
 for package in "${packages[@]}"; do
