@@ -16,6 +16,7 @@
 #include "groundslam/io/Dataset.hpp"
 #include "groundslam/io/Files.hpp"
 #include "groundslam/io/InputError.hpp"
+#include "groundslam/io/MapFile.hpp"
 #include "groundslam/io/RunFolder.hpp"
 #include "groundslam/io/RunFiles.hpp"
 #include "groundslam/io/Tum.hpp"
@@ -31,6 +32,7 @@ struct RunOptions {
   std::string dataset;
   std::string config;
   std::string out_dir;  ///< empty: a new folder under runs/, with runs/latest pointing at it
+  std::string map;      ///< a prior map (map.gsmap of an earlier run): the session localizes and tracks on it
   bool no_loop_closure = false;
   bool report = false;
 };
@@ -114,7 +116,12 @@ std::string runYaml(const RunOptions& o, const RunProgress& progress) {
 /// Runs SLAM on the dataset and writes every result file into `folder`, a fresh folder of this run's own.
 RunProgress runInto(const std::string& folder, const RunOptions& o, const Dataset& dataset, const Config& config) {
   const auto file = [&](const char* name) { return (fs::path(folder) / name).string(); };
-  Slam slam(config, loadVocabulary(config));
+  const std::shared_ptr<const Vocabulary> vocabulary = loadVocabulary(config);
+  Slam slam(config, vocabulary);
+  if (!o.map.empty()) {
+    if (!vocabulary) throw InputError("--map " + o.map + ": a prior map needs loop closure (drop --no-loop-closure)");
+    slam.usePriorMap(readMap(o.map, vocabulary));
+  }
   writeNewFile(file("config.yaml"), configToYaml(config));
   std::vector<double> load_ms;
   const std::vector<FrameResult> results = processAll(dataset, config, slam, load_ms);
@@ -123,6 +130,7 @@ RunProgress runInto(const std::string& folder, const RunOptions& o, const Datase
   writeNewFile(file("frames.csv"), formatFramesCsv(results, load_ms));
   writeNewFile(file("loop_closures.csv"), formatLoopClosuresCsv(slam.loopCandidates()));
   writeNewFile(file("graph.g2o"), formatG2o(slam.graph()));
+  if (slam.featureMap()) writeNewFile(file("map.gsmap"), formatMap(*slam.featureMap(), slam.mapSegment()));
   const auto measured = std::count_if(trajectory.begin(), trajectory.end(), [](const StampedPose& p) { return p.measured; });
   std::cout << "processed " << results.size() << " of " << dataset.frames.size() << " frames: " << measured << " measured, "
             << countStatus(results, "fallback") << " with fallback odometry (pose assumed from earlier motion), "
@@ -150,7 +158,7 @@ RunProgress runInto(const std::string& folder, const RunOptions& o, const Datase
 
 /// Every file the run reads: none may lie inside the output folder that the run replaces.
 std::vector<std::string> runInputs(const RunOptions& o, const Dataset& dataset, const Config& config) {
-  std::vector<std::string> inputs = {o.dataset, o.config, dataset.camera_yaml.value_or("")};
+  std::vector<std::string> inputs = {o.dataset, o.config, dataset.camera_yaml.value_or(""), o.map};
   if (config.loop_closure.enabled) inputs.push_back(vocabularyPath(config));
   return inputs;
 }
@@ -166,6 +174,7 @@ void run(const RunOptions& o) {
     if (!o.no_loop_closure) {
       RunOptions odometry = o;
       odometry.no_loop_closure = true;
+      odometry.map.clear();
       const std::string odometry_folder = folder.path("odometry");
       fs::create_directory(odometry_folder);
       std::cout << "odometry-only run for the report:\n";
@@ -201,6 +210,9 @@ void addRunCommand(CLI::App& app) {
   cmd->add_option("--out", o->out_dir,
                   "Run folder for the results; replaced only when the run succeeds, refused when it holds other files "
                   "(default: a new folder runs/YYYYmmdd_HHMMSS, with runs/latest pointing at it)");
+  cmd->add_option("--map", o->map, "Prior map (map.gsmap of an earlier run): localize on it, track and close loops against it; "
+                                    "poses come out in its frame and DIR/map.gsmap is the merged map")
+      ->check(CLI::ExistingFile);
   cmd->add_flag("--no-loop-closure", o->no_loop_closure, "Odometry only (sets loop_closure.enabled = false)");
   cmd->add_flag("--report", o->report, "Also run odometry only into DIR/odometry and write DIR/report.html");
   cmd->callback([o]() { run(*o); });

@@ -18,6 +18,7 @@ int main(int argc, char** argv) {
   groundslam::apps::addVocabularyCommand(app);
   groundslam::apps::addReportCommand(app);
   groundslam::apps::addFloorCommand(app);
+  groundslam::apps::addLocalizeCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -21,6 +21,7 @@ FeatureMap::FeatureMap(std::shared_ptr<const Vocabulary> vocabulary, const Featu
 
 int FeatureMap::addStoredAnchor(const MapAnchor& anchor) {
   anchors_.push_back(anchor);
+  features_of_anchor_.emplace_back();
   return static_cast<int>(anchors_.size()) - 1;
 }
 
@@ -38,7 +39,6 @@ int FeatureMap::addAnchor(int frame, const Pose2& T_map_anchor, int segment, con
     f.anchor = static_cast<std::uint32_t>(anchor);
     f.octave = features.octaves[i];
     addStoredFeature(f);
-    index(static_cast<std::uint32_t>(features_.size() - 1), position);
   }
   return anchor;
 }
@@ -46,8 +46,10 @@ int FeatureMap::addAnchor(int frame, const Pose2& T_map_anchor, int segment, con
 void FeatureMap::addStoredFeature(const MapFeature& feature) {
   const auto index = static_cast<std::uint32_t>(features_.size());
   features_.push_back(feature);
+  this->index(index, positionOf(feature));
   const int word = vocabulary_->wordOf(feature.descriptor.data());
   if (word >= 0) postings_[static_cast<size_t>(word)].push_back(index);
+  features_of_anchor_[feature.anchor].push_back(index);
 }
 
 void FeatureMap::index(std::uint32_t feature_index, const Eigen::Vector2d& position) {
@@ -110,7 +112,8 @@ std::vector<int> FeatureMap::anchorsNear(const Eigen::Vector2d& where, double ra
 size_t FeatureMap::bytes() const {
   size_t grid = 0;
   for (const auto& [cell, members] : dedup_grid_) grid += members.capacity() * sizeof(std::uint32_t) + 48;  // + node
-  return features_.size() * (sizeof(MapFeature) + sizeof(std::uint32_t)) + anchors_.size() * sizeof(MapAnchor) + grid;
+  // Per feature: itself, its posting, its entry in its anchor's list and in the dedup grid.
+  return features_.size() * (sizeof(MapFeature) + 2 * sizeof(std::uint32_t)) + anchors_.size() * sizeof(MapAnchor) + grid;
 }
 
 }  // namespace groundslam

@@ -65,6 +65,7 @@ class FeatureMap {
   /// Map-frame position of a feature (its anchor's current pose applied).
   Eigen::Vector2d positionOf(const MapFeature& f) const;
   double angleOf(const MapFeature& f) const;
+  const std::vector<std::uint32_t>& featuresOf(int anchor) const { return features_of_anchor_[static_cast<size_t>(anchor)]; }
   /// Anchors whose position lies within `radius_m` of `where`.
   std::vector<int> anchorsNear(const Eigen::Vector2d& where, double radius_m) const;
   /// Bytes held per feature (features and postings), for the memory budget.
@@ -80,6 +81,7 @@ class FeatureMap {
   std::vector<MapAnchor> anchors_;
   std::vector<MapFeature> features_;
   std::vector<std::vector<std::uint32_t>> postings_;               ///< word -> features
+  std::vector<std::vector<std::uint32_t>> features_of_anchor_;     ///< anchor -> its features
   std::unordered_map<CellKey, std::vector<std::uint32_t>> dedup_grid_;  ///< positions when stored (for dedup only)
 };
 

@@ -133,13 +133,14 @@ double inlierSpread(const std::vector<Eigen::Vector2d>& inlier_points, const Gro
 
 /// Every usable map feature near the predicted pose, in map coordinates, for guided re-matching.
 GroundFeatures mapFeaturesAround(const FeatureMap& map, const Eigen::Vector2d& where, double radius_m, const AnchorFilter& usable) {
-  std::vector<bool> near(map.anchors().size(), false);
-  for (const int a : map.anchorsNear(where, radius_m)) near[static_cast<size_t>(a)] = usable.empty() || usable[static_cast<size_t>(a)];
   GroundFeatures around;
-  for (const MapFeature& f : map.features()) {
-    if (!near[f.anchor]) continue;
-    around.points.push_back(map.positionOf(f));
-    around.descriptors.push_back(cv::Mat(1, 32, CV_8U, const_cast<std::uint8_t*>(f.descriptor.data())));
+  for (const int a : map.anchorsNear(where, radius_m)) {
+    if (!usable.empty() && !usable[static_cast<size_t>(a)]) continue;
+    for (const std::uint32_t i : map.featuresOf(a)) {
+      const MapFeature& f = map.features()[i];
+      around.points.push_back(map.positionOf(f));
+      around.descriptors.push_back(cv::Mat(1, 32, CV_8U, const_cast<std::uint8_t*>(f.descriptor.data())));
+    }
   }
   return around;
 }

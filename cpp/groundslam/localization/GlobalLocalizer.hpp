@@ -36,6 +36,7 @@ struct LocalizationSettings {
   /// A relocalization while lost is accepted when two localizations agree with odometry within these.
   double max_odometry_disagreement_m = 0.01;
   double max_odometry_disagreement_rad = 0.035;
+  int every_frames = 10;  ///< on a prior map, a tracked frame is localized on it this often (a loop closure)
 };
 
 enum class LocalizationStatus { localized, too_few_votes, ambiguous, too_few_inliers, covariance, clustered };

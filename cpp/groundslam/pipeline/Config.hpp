@@ -174,6 +174,7 @@ void visitConfigFields(Config_& c, Visitor&& v) {
   v("localization", "footprint_radius_m", c.localization.footprint_radius_m, kPositive);
   v("localization", "max_odometry_disagreement_m", c.localization.max_odometry_disagreement_m, kPositive);
   v("localization", "max_odometry_disagreement_rad", c.localization.max_odometry_disagreement_rad, kPositive);
+  v("localization", "every_frames", c.localization.every_frames, Range{1, 1e9});
   v("graph", "min_sigma_m", c.graph.min_sigma_m, kNonNegative);
   v("graph", "min_sigma_rad", c.graph.min_sigma_rad, kNonNegative);
   v("graph", "optimise_every_frames", c.graph.optimise_every_frames, Range{1, 1e9});

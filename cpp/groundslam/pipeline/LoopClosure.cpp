@@ -235,6 +235,35 @@ LoopCandidate LoopCloser::candidateFrom(const Localization& localization, int fr
   return candidate;
 }
 
+void LoopCloser::adoptPriorMap(const FeatureMap& prior) {
+  for (size_t a = 0; a < prior.anchors().size(); ++a) {
+    feature_map_.addStoredAnchor({static_cast<int>(a), prior.anchors()[a].T_map_anchor, 0});
+  }
+  for (const MapFeature& f : prior.features()) feature_map_.addStoredFeature(f);
+  segment_of_frame_.assign(prior.anchors().size(), 0);
+  path_length_m_.assign(prior.anchors().size(), 0.0);
+}
+
+std::optional<LoopCandidate> LoopCloser::localizeOnPriorMap(int frame, const GroundFeatures& features,
+                                                            const std::vector<Pose2>& estimates, int prior_frames) {
+  AnchorFilter usable(feature_map_.anchors().size());
+  for (size_t a = 0; a < usable.size(); ++a) usable[a] = feature_map_.anchors()[a].frame < prior_frames;
+  const Localization localization = localizeGlobally(feature_map_, features, localization_, fitting_, usable);
+  if (!localization.ok()) return std::nullopt;
+  const size_t f = static_cast<size_t>(frame);
+  const double d = recent_loops_.empty() ? path_length_m_[f] - path_length_m_[static_cast<size_t>(prior_frames)]
+                                         : path_length_m_[f] - path_length_m_[static_cast<size_t>(recent_loops_.back().second)];
+  const Pose2 disagreement = estimates[f].inverse() * localization.T_map_robot;
+  if (disagreement.translation().norm() > settings_.max_disagreement_m + settings_.max_disagreement_per_m * d ||
+      std::abs(disagreement.theta) > settings_.max_disagreement_rad + settings_.max_disagreement_rad_per_m * d) {
+    return std::nullopt;
+  }
+  LoopCandidate candidate = candidateFrom(localization, frame);
+  recent_loops_.emplace_back(candidate.frame_a, frame);
+  if (recent_loops_.size() > kRecentLoops) recent_loops_.pop_front();
+  return candidate;
+}
+
 std::vector<LoopCandidate> LoopCloser::relocalize(int frame, const GroundFeatures& features, const std::vector<Pose2>& estimates) {
   const int lost_segment = segmentOf(frame);
   AnchorFilter usable(feature_map_.anchors().size());

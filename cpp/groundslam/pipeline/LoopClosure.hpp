@@ -85,6 +85,14 @@ class LoopCloser {
   /// localization is accepted when the next one agrees with odometry; then both are returned as loop
   /// candidates (frame_a: the map keyframe, frame_b: the lost frame) and the frame's segment joins the map's.
   std::vector<LoopCandidate> relocalize(int frame, const GroundFeatures& features, const std::vector<Pose2>& estimates);
+  /// Takes a prior map (a map file of an earlier session): its keyframes are frames 0..K-1 of segment 0,
+  /// before any frame of this session.
+  void adoptPriorMap(const FeatureMap& prior);
+  /// While tracking on a prior map: localizes the frame on the prior map's keyframes (frames below
+  /// `prior_frames`); accepted when it agrees with the current estimate up to the drift since the last
+  /// correction, and returned as a loop candidate.
+  std::optional<LoopCandidate> localizeOnPriorMap(int frame, const GroundFeatures& features, const std::vector<Pose2>& estimates,
+                                                  int prior_frames);
   /// The segment a relocalization joined the lost segment to (valid after relocalize returned candidates).
   int segmentOf(int frame) const { return segment_of_frame_[static_cast<size_t>(frame)]; }
   /// Re-files the places of frames from `first_moved` on under their current estimates, after an

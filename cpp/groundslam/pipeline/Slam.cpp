@@ -1,6 +1,8 @@
 #include "groundslam/pipeline/Slam.hpp"
 
 #include <algorithm>
+#include <cmath>
+#include <stdexcept>
 
 #include "groundslam/pipeline/StageTimer.hpp"
 
@@ -39,13 +41,14 @@ FrameResult Slam::process(const cv::Mat& image, double timestamp) { return proce
 FrameResult Slam::process(PreparedFrame prepared) {
   StageTimer total;
   FrameResult result;
-  result.index = static_cast<int>(timestamps_.size());
+  const int frame = static_cast<int>(timestamps_.size());  // graph index: a prior map's keyframes come first
+  result.index = frame - prior_frames_;
   result.timestamp = prepared.timestamp;
   result.keypoints = static_cast<int>(prepared.features.size());
   result.times.extract_ms = prepared.extract_ms;
   result.times.project_ms = prepared.project_ms;
   timestamps_.push_back(prepared.timestamp);
-  Keyframe current{result.index, prepared.timestamp, std::move(prepared.features)};
+  Keyframe current{frame, prepared.timestamp, std::move(prepared.features)};
 
   // §III-B: match to the previous image, fit T_prev_curr with a robust M-estimator (eqs. 5-6), add the edge.
   if (previous_) {
@@ -58,6 +61,12 @@ FrameResult Slam::process(PreparedFrame prepared) {
     }
     result.status = lost_ ? "lost" : odometry.fallback ? std::string("fallback_") + fitStatusName(odometry.fit_status) : "ok";
     measured_.push_back(!odometry.fallback && !lost_);
+  } else if (prior_frames_ > 0) {
+    // On a prior map the first frame's pose is unknown until global localization finds it.
+    graph_.addPose(Pose2());
+    graph_.addEdge({0, frame, Pose2(), Eigen::Vector3d(1e-4, 1e-4, 1e-4).asDiagonal(), false});
+    result.status = "lost";
+    measured_.push_back(false);
   } else {
     graph_.addPose(Pose2());
     result.status = "first";
@@ -67,6 +76,7 @@ FrameResult Slam::process(PreparedFrame prepared) {
   // §III-C: loop closures through the three gates become graph edges; the graph is optimised (LM).
   closeLoops(current, result);
   if (lost_) relocalize(current, result);
+  else if (prior_frames_ > 0) closeLoopsOnPriorMap(current, result);
   optimiseIfDue(result, false);
 
   result.T_world_robot = graph_.poses().back();
@@ -104,7 +114,7 @@ void Slam::relocalize(const Keyframe& current, FrameResult& result) {
   result.times.loop_ms += timer.lap();
   if (joined.empty()) return;
   for (const LoopCandidate& candidate : joined) {
-    candidates_.push_back(candidate);
+    candidates_.push_back(reported(candidate));
     graph_.addEdge({candidate.frame_a, candidate.frame_b, candidate.T_a_b,
                     informationFrom(candidate.covariance, config_.graph.min_sigma_m, config_.graph.min_sigma_rad), true});
     ++result.loop_closures;
@@ -119,11 +129,46 @@ void Slam::relocalize(const Keyframe& current, FrameResult& result) {
   optimise_now_ = true;
 }
 
+void Slam::usePriorMap(const FeatureMap& prior) {
+  if (!loop_closer_) throw std::invalid_argument("a prior map needs loop closure (loop_closure.enabled and a vocabulary)");
+  if (!timestamps_.empty()) throw std::invalid_argument("a prior map must be given before the first frame");
+  for (const MapAnchor& anchor : prior.anchors()) {
+    graph_.addPose(anchor.T_map_anchor);
+    timestamps_.push_back(std::nan(""));
+    measured_.push_back(true);
+  }
+  loop_closer_->adoptPriorMap(prior);
+  prior_frames_ = static_cast<int>(prior.anchors().size());
+  segment_ = 1;
+  lost_ = true;
+  lost_since_ = prior_frames_;
+}
+
+void Slam::closeLoopsOnPriorMap(const Keyframe& current, FrameResult& result) {
+  if (current.index - last_prior_attempt_ < config_.localization.every_frames) return;
+  last_prior_attempt_ = current.index;
+  StageTimer timer;
+  const auto candidate = loop_closer_->localizeOnPriorMap(current.index, current.features, graph_.poses(), prior_frames_);
+  result.times.loop_ms += timer.lap();
+  if (!candidate) return;
+  graph_.addEdge({candidate->frame_a, candidate->frame_b, candidate->T_a_b,
+                  informationFrom(candidate->covariance, config_.graph.min_sigma_m, config_.graph.min_sigma_rad), true});
+  candidates_.push_back(reported(*candidate));
+  ++result.loop_closures;
+  ++unoptimised_loops_;
+}
+
+LoopCandidate Slam::reported(LoopCandidate candidate) const {
+  candidate.frame_a -= prior_frames_;
+  candidate.frame_b -= prior_frames_;
+  return candidate;
+}
+
 void Slam::closeLoops(const Keyframe& current, FrameResult& result) {
   if (!loop_closer_) return;
   StageTimer timer;
   for (const LoopCandidate& candidate : loop_closer_->process(current.index, segment_, current.features, graph_.poses())) {
-    candidates_.push_back(candidate);
+    candidates_.push_back(reported(candidate));
     if (!candidate.accepted()) continue;
     graph_.addEdge({candidate.frame_a, candidate.frame_b, candidate.T_a_b,
                     informationFrom(candidate.covariance, config_.graph.min_sigma_m, config_.graph.min_sigma_rad), true});
@@ -149,8 +194,9 @@ void Slam::optimiseIfDue(FrameResult& result, bool at_end) {
   const bool full = at_end || full_optimisation_due_ || window == 0 || frame < window;
   // The window reaches back to every loop edge added since the last optimisation.
   const int first_free = full ? 0 : std::max(0, std::min(frame + 1 - window, last_optimised_frame_ + 1));
-  graph_.optimise(first_free);  // warm start: the current estimates are the initial values
-  if (loop_closer_) loop_closer_->mapMoved(graph_.poses(), first_free);
+  const int first_moving = std::max(first_free, prior_frames_);  // a prior map is held where it is
+  graph_.optimise(first_moving);  // warm start: the current estimates are the initial values
+  if (loop_closer_) loop_closer_->mapMoved(graph_.poses(), first_moving);
   window_solved_ = !full;
   full_optimisation_due_ = false;
   unoptimised_loops_ = 0;
@@ -205,7 +251,9 @@ OdometryEdge Slam::fallbackOdometry(OdometryEdge failed) const {
 
 Trajectory Slam::trajectory() const {
   Trajectory trajectory;
-  for (size_t i = 0; i < graph_.poses().size(); ++i) trajectory.push_back({timestamps_[i], graph_.poses()[i], measured_[i]});
+  for (size_t i = static_cast<size_t>(prior_frames_); i < graph_.poses().size(); ++i) {
+    trajectory.push_back({timestamps_[i], graph_.poses()[i], measured_[i]});
+  }
   return trajectory;
 }
 

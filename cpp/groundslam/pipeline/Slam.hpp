@@ -46,6 +46,15 @@ class Slam {
   /// std::invalid_argument("section.key: ...") when the configuration is unusable (validateConfig).
   Slam(const Config& config, std::shared_ptr<const Vocabulary> vocabulary);
 
+  /// Starts the session on a prior map (a map file of an earlier session), before the first frame: its
+  /// keyframes become held graph poses, the session starts lost and localizes globally on the map, then
+  /// tracks and closes loops against it. Every pose comes out in the map's frame. Needs loop closure.
+  void usePriorMap(const FeatureMap& prior);
+  /// The feature map of global localization (null when loop closure is disabled), and the segment whose
+  /// keyframes are tied to the map frame (what a map file keeps).
+  const FeatureMap* featureMap() const { return loop_closer_ ? &loop_closer_->featureMap() : nullptr; }
+  int mapSegment() const { return 0; }
+
   /// Processes the next image (8-bit grey) of the sequence: prepareFrame, then process.
   FrameResult process(const cv::Mat& image, double timestamp);
   /// Image processing alone (§III-A). It reads no state that process() changes, so an application may
@@ -62,7 +71,7 @@ class Slam {
   /// The current estimate of every processed frame's pose.
   Trajectory trajectory() const;
   const PoseGraph& graph() const { return graph_; }
-  /// Every loop-closure candidate verified so far, accepted or not.
+  /// Every loop-closure candidate verified so far, accepted or not (frames as in FrameResult::index).
   const std::vector<LoopCandidate>& loopCandidates() const { return candidates_; }
 
  private:
@@ -74,6 +83,10 @@ class Slam {
   /// While lost: global localization; once it is accepted, the segment joins the map and the graph is optimised.
   void relocalize(const Keyframe& current, FrameResult& result);
   void closeLoops(const Keyframe& current, FrameResult& result);
+  /// With a prior map, every localization.every_frames frames: a loop closure to the prior map's keyframes.
+  void closeLoopsOnPriorMap(const Keyframe& current, FrameResult& result);
+  /// A candidate as reported: frames of this session count from 0, the prior map's keyframes are negative.
+  LoopCandidate reported(LoopCandidate candidate) const;
   void optimiseIfDue(FrameResult& result, bool at_end);
 
   Config config_;
@@ -95,6 +108,8 @@ class Slam {
   int segment_ = 0;            ///< the current tracking segment
   bool lost_ = false;          ///< tracking was lost and the current segment is not yet joined to the map
   int lost_since_ = 0;         ///< first frame of the current segment
+  int prior_frames_ = 0;       ///< graph poses 0..prior_frames_-1 are a prior map's keyframes, held fixed
+  int last_prior_attempt_ = -1000000;  ///< frame of the last localization on the prior map
 };
 
 }  // namespace groundslam
