@@ -9,7 +9,7 @@ build=${1:-build-fuzz}
 seconds=${2:-60}
 work=${3:-fuzz-work}
 root=$(cd "$(dirname "$0")/.." && pwd)
-targets=(hd_ground_list tum config_yaml vocabulary)
+targets=(hd_ground_list tum config_yaml vocabulary map)
 
 failed=()
 summary=()

@@ -6,7 +6,10 @@
 
 #include <gtest/gtest.h>
 
+#include "groundslam/eval/TrajectoryMetrics.hpp"
+#include "groundslam/io/MapFile.hpp"
 #include "groundslam/io/VocabularyFile.hpp"
+#include "groundslam/pipeline/Slam.hpp"
 #include "groundslam/localization/GlobalLocalizer.hpp"
 #include "groundslam/pipeline/FramePreparer.hpp"
 #include "groundslam/sim/Simulator.hpp"
@@ -109,4 +112,111 @@ TEST(GlobalLocalization, TilesAreRefusedRatherThanLocalizedOneTileOff) {
   // with no prior the localizer must refuse, never pick a repetition.
   const Score s = secondSession("tiles");
   EXPECT_EQ(s.wrong, 0);
+}
+
+namespace {
+
+std::string mapErrorOf(const std::string& name) {
+  try {
+    readMap(std::string(GROUNDSLAM_SOURCE_DIR) + "/tests/data/map/" + name + ".gsmap", shippedVocabulary());
+  } catch (const std::exception& e) {
+    return e.what();
+  }
+  return "";
+}
+
+}  // namespace
+
+TEST(MapFile, RoundTripsExactly) {
+  const auto settings = session("asphalt", sim::PathKind::loop, 30, 1);
+  const sim::SequenceSimulator simulator(settings);
+  const FramePreparer preparer(configFor(settings));
+  const FeatureMap map = mapOf(simulator, preparer, 5);
+  const FeatureMap back = parseMap(formatMap(map, 0), "memory", shippedVocabulary());
+  ASSERT_EQ(back.anchors().size(), map.anchors().size());
+  ASSERT_EQ(back.features().size(), map.features().size());
+  for (size_t a = 0; a < map.anchors().size(); ++a) {
+    EXPECT_EQ(back.anchors()[a].frame, map.anchors()[a].frame);
+    EXPECT_EQ(back.anchors()[a].T_map_anchor.x, map.anchors()[a].T_map_anchor.x);
+    EXPECT_EQ(back.anchors()[a].T_map_anchor.theta, map.anchors()[a].T_map_anchor.theta);
+  }
+  for (size_t i = 0; i < map.features().size(); ++i) {
+    EXPECT_EQ(back.features()[i].descriptor, map.features()[i].descriptor);
+    EXPECT_EQ(back.features()[i].point, map.features()[i].point);
+    EXPECT_EQ(back.features()[i].angle_rad, map.features()[i].angle_rad);
+    EXPECT_EQ(back.features()[i].anchor, map.features()[i].anchor);
+    EXPECT_EQ(back.features()[i].octave, map.features()[i].octave);
+  }
+  EXPECT_EQ(formatMap(back, 0), formatMap(map, 0));
+  EXPECT_EQ(formatMap(map, 0).size(), 20 + 32 * map.anchors().size() + 49 * map.features().size() + 8);
+}
+
+TEST(MapFile, CorruptAndCraftedFilesAreRefusedWithTheReason) {
+  EXPECT_NE(mapErrorOf("truncated").find("truncated.gsmap: map file is"), std::string::npos);
+  EXPECT_NE(mapErrorOf("bad_checksum").find("bad_checksum.gsmap: map file is corrupt (checksum)"), std::string::npos);
+  EXPECT_NE(mapErrorOf("feature_anchor_out_of_range").find("map file is inconsistent: feature 0 names keyframe 10 of 5"), std::string::npos)
+      << mapErrorOf("feature_anchor_out_of_range");
+  EXPECT_NE(mapErrorOf("nan_keyframe_pose").find("keyframe 0 has a pose that is not finite"), std::string::npos);
+  EXPECT_NE(mapErrorOf("inf_feature_position").find("feature 0 has a position"), std::string::npos);
+  EXPECT_NE(mapErrorOf("future_version").find("map format version 9"), std::string::npos);
+  EXPECT_NE(mapErrorOf("huge_anchor_count").find("its header promises"), std::string::npos);
+  EXPECT_NE(mapErrorOf("empty").find("holds no keyframes or no features"), std::string::npos);
+  EXPECT_EQ(mapErrorOf("valid_tiny"), "");
+}
+
+TEST(Relocalization, AKidnappedRobotRelocalizesAndTheGapSnapsIntoPlace) {
+  // A loop driven twice; frames 250-329 are never seen (the robot is carried 80 cm along its path).
+  auto settings = session("asphalt", sim::PathKind::loop, 400, 3);
+  settings.ground_seed.reset();
+  settings.mount_jitter_deg = 0.5;
+  const sim::SequenceSimulator simulator(settings);
+  Config config = configFor(settings);
+  Slam slam(config, shippedVocabulary());
+  Trajectory truth;
+  int relocalized_at = -1, lost = 0;
+  for (int i = 0; i < simulator.frameCount(); ++i) {
+    if (i >= 250 && i < 330) continue;
+    const FrameResult r = slam.process(simulator.renderFrame(i), static_cast<double>(i));
+    truth.push_back({static_cast<double>(i), simulator.groundTruth()[static_cast<size_t>(i)]});
+    lost += r.status == "lost" ? 1 : 0;
+    if (r.status == "relocalized" && relocalized_at < 0) relocalized_at = i;
+  }
+  slam.finish();
+  EXPECT_GE(lost, 1);
+  ASSERT_GE(relocalized_at, 330);
+  EXPECT_LE(relocalized_at, 335);  // within 5 frames of landing on mapped ground
+  const TrajectoryMetrics m = evaluateTrajectory(truth, slam.trajectory()).metrics;
+  EXPECT_EQ(m.measured_frames, m.groundtruth_frames);
+  EXPECT_LT(m.ate_rmse_m, 0.005);
+  EXPECT_LT(m.rotation_mae_deg, 0.2);
+}
+
+TEST(Relocalization, ASecondSessionOnAPriorMapComesOutInTheMapFrame) {
+  auto first_settings = session("concrete", sim::PathKind::lawnmower, 300, 1);
+  first_settings.path.lane_length_m = 0.5;
+  const sim::SequenceSimulator first(first_settings);
+  const Config config = configFor(first_settings);
+  Slam mapping(config, shippedVocabulary());
+  for (int i = 0; i < first.frameCount(); ++i) mapping.process(first.renderFrame(i), i);
+  mapping.finish();
+  const FeatureMap map = parseMap(formatMap(*mapping.featureMap(), mapping.mapSegment()), "memory", shippedVocabulary());
+
+  auto second_settings = session("concrete", sim::PathKind::random_walk, 120, 2);
+  second_settings.path.area_m = 0.3;
+  second_settings.wet_after = 0.0;  // the floor looks different the second time
+  const sim::SequenceSimulator second(second_settings);
+  Slam session2(config, shippedVocabulary());
+  session2.usePriorMap(map);
+  for (int i = 0; i < second.frameCount(); ++i) session2.process(second.renderFrame(i), i);
+  session2.finish();
+  // The map frame is the first session's first pose.
+  const Pose2 T_world_map = first.groundTruth().front();
+  int within = 0;
+  const Trajectory estimate = session2.trajectory();
+  ASSERT_EQ(estimate.size(), 120u);
+  for (size_t i = 0; i < estimate.size(); ++i) {
+    const Pose2 error = second.groundTruth()[i].inverse() * (T_world_map * estimate[i].T_world_robot);
+    within += error.translation().norm() < 0.01 && std::abs(error.theta) < M_PI / 180.0 ? 1 : 0;
+  }
+  EXPECT_GE(within, 114) << "of 120 within 1 cm and 1 degree";
 }

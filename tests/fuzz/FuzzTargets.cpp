@@ -2,14 +2,17 @@
 
 #include <algorithm>
 #include <cstring>
+#include <memory>
 
 #include <opencv2/core.hpp>
 
 #include "groundslam/bow/Vocabulary.hpp"
+#include "groundslam/io/BinaryFormat.hpp"
 #include "groundslam/io/ConfigYaml.hpp"
 #include "groundslam/io/Dataset.hpp"
 #include "groundslam/io/InputError.hpp"
 #include "groundslam/io/Tum.hpp"
+#include "groundslam/io/MapFile.hpp"
 #include "groundslam/io/VocabularyFile.hpp"
 
 namespace groundslam::fuzz {
@@ -17,16 +20,6 @@ namespace {
 
 std::string text(const std::uint8_t* data, size_t size) {
   return size == 0 ? std::string() : std::string(reinterpret_cast<const char*>(data), size);
-}
-
-/// The vocabulary file's FNV-1a-64 over `length` bytes (the format's checksum; VocabularyFile.cpp).
-std::uint64_t fnv1a(const std::string& bytes, size_t length) {
-  std::uint64_t hash = 1469598103934665603ULL;
-  for (size_t i = 0; i < length; ++i) {
-    hash ^= static_cast<unsigned char>(bytes[i]);
-    hash *= 1099511628211ULL;
-  }
-  return hash;
 }
 
 constexpr size_t kHeaderBytes = 8 + 5 * 4;  // magic, version, branching, depth, node count, word count
@@ -117,12 +110,35 @@ void fuzzVocabulary(const std::uint8_t* data, size_t size) {
   }
 }
 
+void fuzzMap(const std::uint8_t* data, size_t size) {
+  // The checksum is recomputed unless bit 0 of the mode byte is set, as for vocabularies.
+  std::string bytes = size == 0 ? std::string() : text(data + 1, size - 1);
+  if (size > 0 && (data[0] & 1) == 0) {
+    if (bytes.size() < 8) bytes.append(8 - bytes.size(), '\0');
+    const std::uint64_t checksum = fnv1a(bytes, bytes.size() - 8);
+    std::memcpy(bytes.data() + bytes.size() - 8, &checksum, sizeof(checksum));
+  }
+  // A two-word vocabulary: enough to index the features.
+  static const auto vocabulary = std::make_shared<const Vocabulary>(
+      2, 1, std::vector<Vocabulary::Node>{{Descriptor{}, 1, 2, -1}, {Descriptor{}, -1, 0, 0}, {Descriptor{}, -1, 0, 1}},
+      std::vector<double>{0.5, 0.5});
+  try {
+    const FeatureMap map = parseMap(bytes, "fuzz.gsmap", vocabulary);
+    // Every feature's keyframe must exist and every position be finite.
+    for (const MapFeature& f : map.features()) {
+      if (!map.positionOf(f).allFinite()) throw FuzzInvariantError("a map feature has a position that is not finite");
+    }
+  } catch (const InputError&) {
+  }
+}
+
 const std::vector<FuzzTarget>& fuzzTargets() {
   static const std::vector<FuzzTarget> targets = {
       {"hd_ground_list", fuzzHdGroundList},
       {"tum", fuzzTum},
       {"config_yaml", fuzzConfigYaml},
       {"vocabulary", fuzzVocabulary},
+      {"map", fuzzMap},
   };
   return targets;
 }

@@ -32,6 +32,10 @@ void fuzzConfigYaml(const std::uint8_t* data, size_t size);
 /// header promises first. On success, descriptors taken from the input go through wordOf and transform.
 void fuzzVocabulary(const std::uint8_t* data, size_t size);
 
+/// Map file (map.gsmap); bit 0 of the first byte clear: the checksum is recomputed. On success every
+/// feature's position is computed through its keyframe.
+void fuzzMap(const std::uint8_t* data, size_t size);
+
 /// The vocabulary bytes fuzzVocabulary parses for an input (mode byte applied and removed).
 std::string vocabularyBytesFor(const std::uint8_t* data, size_t size);
 
@@ -40,7 +44,7 @@ struct FuzzTarget {
   void (*run)(const std::uint8_t* data, size_t size);
 };
 
-/// Every target, by name: hd_ground_list, tum, config_yaml, vocabulary.
+/// Every target, by name: hd_ground_list, tum, config_yaml, vocabulary, map.
 const std::vector<FuzzTarget>& fuzzTargets();
 
 }  // namespace groundslam::fuzz
