@@ -10,7 +10,7 @@ shift 2 || true
 frames=${FRAMES:-400}
 kinds=${KINDS:-"asphalt concrete carpet tiles"}
 paths=${PATHS_:-"loop lawnmower random_walk"}
-echo "| texture | path | frames | odometry cm/m | odometry deg | SLAM cm/m | SLAM deg | SLAM ATE mm | loops accepted | wrong | precision | recall | fallback frames |"
+echo "| texture | path | frames | odometry cm/m | odometry deg | SLAM cm/m | SLAM deg | SLAM ATE mm | loops accepted | wrong | precision | recall | fallback or lost frames |"
 echo "|---|---|---|---|---|---|---|---|---|---|---|---|---|"
 for kind in $kinds; do
   for path in $paths; do
@@ -22,7 +22,7 @@ for kind in $kinds; do
     fi
     "$bin" run "$seq/sequence.txt" --out "$out/runs/${kind}_${path}" "$@" >/dev/null
     "$bin" run "$seq/sequence.txt" --out "$out/runs/${kind}_${path}_odometry" --no-loop-closure "$@" >/dev/null
-    fallback=$(grep -c ",fallback" "$out/runs/${kind}_${path}/frames.csv" || true)
+    fallback=$(grep -cE ",(fallback|lost)" "$out/runs/${kind}_${path}/frames.csv" || true)
     /usr/bin/python3 - "$out/runs/${kind}_${path}" "$kind" "$path" "$fallback" <<'PY'
 import json, sys
 run, kind, path, fallback = sys.argv[1:5]
