@@ -4,7 +4,7 @@
 #     along its path and put down on ground it has mapped); when it relocalizes and the run's accuracy;
 #  2. second session: a map from a lawnmower session, then another session (random walk, other seed, wet
 #     look) over the same ground: `localize` (each image on its own) and `run --map`.
-# Usage: scripts/localization_matrix.sh [BIN] [OUT] [SEED]   (env: KINDS, PATHS_, GAP, RESOLUTION)
+# Usage: scripts/localization_matrix.sh [BIN] [OUT] [SEED]   (env: KINDS, PATHS_, GAP, RESOLUTION, EXTRA)
 set -euo pipefail
 bin=${1:-build/groundslam}
 out=${2:-data/localization}
@@ -13,12 +13,13 @@ kinds=${KINDS:-"asphalt concrete carpet tiles"}
 paths=${PATHS_:-"loop random_walk"}
 gap=${GAP:-250:330}
 resolution=${RESOLUTION:-320x240}
-look=(--jitter-deg 0.5 --motion-blur 0.3 --defocus-px 0.6 --noise 2 --exposure-variation 0.15 --vignetting 0.2)
+base=(--jitter-deg 0.5 --motion-blur 0.3 --defocus-px 0.6 --noise 2 --exposure-variation 0.15 --vignetting 0.2)
+look=("${base[@]}" ${EXTRA:-})  # EXTRA: more disturbances for the kidnapped runs and the first session
 mkdir -p "$out"
 
 echo "### Kidnapped robot (path frames $gap left out, seed $seed, $resolution)"
-echo "| texture | path | frames | relocalized after (frames) | lost frames | cm/m | deg | ATE mm | loops | wrong |"
-echo "|---|---|---|---|---|---|---|---|---|---|"
+echo "| texture | path | frames | back on mapped ground after (frames) | relocalized after (frames) | lost frames | cm/m | deg | ATE mm | loops | wrong |"
+echo "|---|---|---|---|---|---|---|---|---|---|---|"
 for kind in $kinds; do
   for path in $paths; do
     seq="$out/gap_${kind}_${path}_$seed"
@@ -26,14 +27,22 @@ for kind in $kinds; do
       --gap "$gap" --seed "$seed" --resolution "$resolution" "${look[@]}" >/dev/null
     "$bin" run "$seq/sequence.txt" --out "$out/runs/gap_${kind}_${path}_$seed" >/dev/null
     /usr/bin/python3 - "$out/runs/gap_${kind}_${path}_$seed" "$kind" "$path" "${gap%%:*}" <<'PY'
-import csv, json, sys
+import csv, json, math, sys
 run, kind, path, gap_start = sys.argv[1], sys.argv[2], sys.argv[3], int(sys.argv[4])
 rows = list(csv.DictReader(open(run + "/frames.csv")))
 reloc = [int(r["index"]) for r in rows if r["status"] == "relocalized" and int(r["index"]) >= gap_start]
 lost = sum(1 for r in rows if r["status"] == "lost")
 m = json.load(open(run + "/metrics.json")); l = m["loop_closure"]
+truth = {}
+for line in open(run + "/groundtruth.tum"):
+    v = line.split()
+    if v: truth[int(round(float(v[0])))] = (float(v[1]), float(v[2]))
+# Mapped ground: within 3 cm of where a frame before the gap was (its footprint is mostly on the map).
+before = [p for i, p in truth.items() if i < gap_start]
+back = next((i for i in sorted(truth) if i >= gap_start and min(math.hypot(truth[i][0] - p[0], truth[i][1] - p[1]) for p in before) < 0.03), None)
+on_map = str(back - gap_start) if back is not None else "never"
 after = str(reloc[0] - gap_start) if reloc else "never"
-print(f"| {kind} | {path} | {len(rows)} | {after} | {lost} | {m['translation_mae_cm_per_m']:.3f} | {m['rotation_mae_deg']:.3f} | "
+print(f"| {kind} | {path} | {len(rows)} | {on_map} | {after} | {lost} | {m['translation_mae_cm_per_m']:.3f} | {m['rotation_mae_deg']:.3f} | "
       f"{1000 * m['ate_rmse_m']:.2f} | {l['accepted']} | {l['wrong_accepted']} |")
 PY
   done
@@ -49,7 +58,7 @@ for kind in $kinds; do
   [ -f "$first/sequence.txt" ] || "$bin" simulate "$first" --texture-kind "$kind" --path lawnmower --frames 500 --lane-length-m 0.5 \
     --ground-seed "$seed" --ground-size-m 1.6 --seed "$seed" --resolution "$resolution" "${look[@]}" >/dev/null
   [ -f "$second/sequence.txt" ] || "$bin" simulate "$second" --texture-kind "$kind" --path random_walk --area-m 0.4 --frames 200 \
-    --ground-seed "$seed" --ground-size-m 1.6 --seed $((seed + 1000)) --wet-after 0 --resolution "$resolution" "${look[@]}" >/dev/null
+    --ground-seed "$seed" --ground-size-m 1.6 --seed $((seed + 1000)) --wet-after 0 --resolution "$resolution" "${base[@]}" >/dev/null
   "$bin" run "$first/sequence.txt" --out "$out/runs/first_${kind}_$seed" >/dev/null
   "$bin" localize "$out/runs/first_${kind}_$seed/map.gsmap" "$second/sequence.txt" --out "$out/runs/localize_${kind}_$seed" >/dev/null
   "$bin" run "$second/sequence.txt" --map "$out/runs/first_${kind}_$seed/map.gsmap" --out "$out/runs/second_${kind}_$seed" >/dev/null

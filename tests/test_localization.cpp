@@ -220,3 +220,56 @@ TEST(Relocalization, ASecondSessionOnAPriorMapComesOutInTheMapFrame) {
   }
   EXPECT_GE(within, 114) << "of 120 within 1 cm and 1 degree";
 }
+
+TEST(FeatureMap, FeaturesAreStoredOnceIndexedByWordAndFollowTheirKeyframe) {
+  const auto settings = session("asphalt", sim::PathKind::loop, 10, 1);
+  const sim::SequenceSimulator simulator(settings);
+  const FramePreparer preparer(configFor(settings));
+  const GroundFeatures features = preparer.prepare(simulator.renderFrame(0), 0).features;
+  ASSERT_TRUE(features.hasOrientations());
+  FeatureMap map(shippedVocabulary());
+  const Pose2 T_map_a(0.3, -0.2, 0.7);
+  map.addAnchor(0, T_map_a, 0, features);
+  const size_t stored = map.features().size();
+  EXPECT_GT(stored, 0.9 * static_cast<double>(features.size()));  // a frame's own features are distinct
+  // The same features seen again from the same place add nothing: they are on the map already.
+  map.addAnchor(1, T_map_a, 0, features);
+  EXPECT_EQ(map.features().size(), stored);
+  // Every feature is in the posting list of its word.
+  size_t postings = 0;
+  for (int w = 0; w < map.vocabulary().wordCount(); ++w) postings += map.postings(w).size();
+  EXPECT_EQ(postings, stored);
+  const MapFeature& f = map.features().front();
+  EXPECT_LT((map.positionOf(f) - T_map_a * f.point.cast<double>()).norm(), 1e-12);
+  // An optimisation that moves the keyframe moves its features.
+  map.moveAnchor(0, Pose2(1.0, 2.0, -0.3));
+  EXPECT_LT((map.positionOf(f) - Pose2(1.0, 2.0, -0.3) * f.point.cast<double>()).norm(), 1e-12);
+  EXPECT_NEAR(map.angleOf(f), wrapAngle(-0.3 + f.angle_rad), 1e-6);
+  EXPECT_EQ(sizeof(MapFeature), 52u);  // 49 bytes of data, aligned
+}
+
+TEST(GlobalLocalization, AFrameLocalizesOnAMapOfItselfAtAnyPoseAndHeading) {
+  const auto settings = session("carpet", sim::PathKind::loop, 10, 1);
+  const sim::SequenceSimulator simulator(settings);
+  const FramePreparer preparer(configFor(settings));
+  const GroundFeatures features = preparer.prepare(simulator.renderFrame(0), 0).features;
+  for (const Pose2& T_map_robot : {Pose2(0.0, 0.0, 0.0), Pose2(12.5, -3.25, 2.9), Pose2(-0.4, 7.0, -1.6)}) {
+    FeatureMap map(shippedVocabulary());
+    map.addAnchor(0, T_map_robot, 0, features);
+    const Localization l = localizeGlobally(map, features, LocalizationSettings{}, Config{}.odometry);
+    ASSERT_TRUE(l.ok()) << localizationStatusName(l.status);
+    EXPECT_LT((l.T_map_robot.translation() - T_map_robot.translation()).norm(), 1e-4);
+    EXPECT_LT(std::abs(wrapAngle(l.T_map_robot.theta - T_map_robot.theta)), 1e-3);
+    EXPECT_EQ(l.anchor, 0);
+    EXPECT_LT(l.T_anchor_robot.translation().norm(), 1e-4);
+  }
+  // Features that are not on the map find nothing, and say so.
+  FeatureMap elsewhere(shippedVocabulary());
+  elsewhere.addAnchor(0, Pose2(), 0, preparer.prepare(simulator.renderFrame(0), 0).features);
+  auto other_settings = session("concrete", sim::PathKind::loop, 10, 9);
+  other_settings.ground_seed = 99;
+  const sim::SequenceSimulator other(other_settings);
+  const Localization none = localizeGlobally(elsewhere, preparer.prepare(other.renderFrame(0), 0).features, LocalizationSettings{},
+                                             Config{}.odometry);
+  EXPECT_FALSE(none.ok());
+}

@@ -19,7 +19,7 @@
 
 namespace groundslam {
 
-/// One map feature: 48 bytes.
+/// One map feature: 52 bytes in memory (49 of data), 49 in a map file.
 struct MapFeature {
   Descriptor descriptor{};       ///< ORB, 256 bits
   Eigen::Vector2f point;         ///< on the ground, in its anchor's robot frame, metres
