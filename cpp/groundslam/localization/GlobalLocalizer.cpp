@@ -208,11 +208,11 @@ Localization localizeGlobally(const FeatureMap& map, const GroundFeatures& query
   // Verify the strongest peaks; the one whose pose the most map features confirm wins. On a repetitive floor
   // another repetition is confirmed almost as well: the winner must clearly beat every rival pose.
   result.status = LocalizationStatus::too_few_inliers;
-  std::vector<std::pair<Verified, int>> verified;  // with the peak's votes
+  std::vector<std::pair<Verified, size_t>> verified;  // with the peak's index
   for (size_t p = 0; p < peaks.size() && p < static_cast<size_t>(s.max_peaks); ++p) {
     if (peaks[p].votes < s.min_votes) break;
     auto v = verifyPeak(map, query, peaks[p], cells, grid, s, fitting, usable);
-    if (v && v->fit.ok()) verified.emplace_back(std::move(*v), peaks[p].votes);
+    if (v && v->fit.ok()) verified.emplace_back(std::move(*v), p);
   }
   if (verified.empty()) return result;
   std::sort(verified.begin(), verified.end(), [](const auto& a, const auto& b) { return a.first.fit.inliers > b.first.fit.inliers; });
@@ -226,12 +226,20 @@ Localization localizeGlobally(const FeatureMap& map, const GroundFeatures& query
   }
   result.T_map_robot = best.fit.T_target_source;
   result.covariance = best.fit.covariance;
-  result.votes = verified.front().second;
+  const size_t winner = verified.front().second;
+  result.votes = peaks[winner].votes;
   result.inliers = best.fit.inliers;
   result.runner_up_inliers = rival;
+  // Votes too: on a repetitive floor many peaks, one per repetition, collect about as many votes.
+  int rival_votes = 0;
+  for (size_t p = 0; p < peaks.size(); ++p) {
+    if (p != winner) rival_votes = std::max(rival_votes, peaks[p].votes);
+  }
+  result.runner_up_votes = rival_votes;
   if (result.inliers < s.min_inliers) {
     result.status = LocalizationStatus::too_few_inliers;
-  } else if (static_cast<double>(rival) > s.max_rival_ratio * static_cast<double>(result.inliers)) {
+  } else if (static_cast<double>(rival) > s.max_rival_ratio * static_cast<double>(result.inliers) ||
+             static_cast<double>(rival_votes) > s.max_vote_ratio * static_cast<double>(result.votes)) {
     result.status = LocalizationStatus::ambiguous;
   } else if (best.fit.covarianceScore() > s.max_covariance_score) {
     result.status = LocalizationStatus::covariance;

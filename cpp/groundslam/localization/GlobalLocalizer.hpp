@@ -27,6 +27,7 @@ struct LocalizationSettings {
   int max_peaks = 4;                 ///< peaks verified, strongest first
   int min_votes = 8;                 ///< a peak with fewer votes is not verified
   double max_rival_ratio = 0.8;      ///< inliers of the best rival pose / the winner's, at most
+  double max_vote_ratio = 0.7;       ///< votes of the strongest other peak / the winner's, at most
   int min_inliers = 30;              ///< after guided re-matching
   double max_covariance_score = -4.0;  ///< log10 of the largest eigenvalue of the fit's covariance
   double min_spread = 0.25;          ///< inliers must span this fraction of the query features' extent (both axes)
@@ -48,6 +49,7 @@ struct Localization {
   Eigen::Matrix3d covariance = Eigen::Matrix3d::Identity();  ///< of T_map_robot (x, y, theta)
   int votes = 0;            ///< the winning peak's votes (its neighbourhood)
   int runner_up_inliers = 0;  ///< inliers of the best verified pose away from the winner
+  int runner_up_votes = 0;    ///< votes of the strongest other peak
   int inliers = 0;
   int anchor = -1;          ///< the map anchor nearest the pose (for a graph edge)
   Pose2 T_anchor_robot;     ///< the pose relative to that anchor
