@@ -60,9 +60,7 @@ std::vector<LoopCandidate> readCandidatesCsv(const std::string& path) {
   std::vector<LoopCandidate> candidates;
   for (int number = 2; std::getline(in, line); ++number) {
     if (trim(line).empty()) continue;
-    std::vector<std::string> cells;
-    std::stringstream row(line);
-    for (std::string cell; std::getline(row, cell, ',');) cells.push_back(cell);
+    const std::vector<std::string> cells = splitCsvRow(line);
     if (cells.size() < 12) throw InputError(path + ":" + std::to_string(number) + ": expected at least 12 columns");
     try {
       LoopCandidate c;
@@ -92,9 +90,8 @@ void markUnmeasuredPoses(const std::string& path, Trajectory& trajectory) {
   std::istringstream in(readTextFile(path));
   std::string line;
   std::getline(in, line);
-  std::vector<std::string> header;
-  std::stringstream header_row(line);
-  for (std::string cell; std::getline(header_row, cell, ',');) header.push_back(trim(cell));
+  std::vector<std::string> header = splitCsvRow(line);
+  for (std::string& cell : header) cell = trim(cell);
   const auto column = [&](const std::string& name) {
     const auto it = std::find(header.begin(), header.end(), name);
     if (it == header.end()) throw InputError(path + ":1: no '" + name + "' column");
@@ -104,9 +101,7 @@ void markUnmeasuredPoses(const std::string& path, Trajectory& trajectory) {
   std::set<double> unmeasured;
   for (int number = 2; std::getline(in, line); ++number) {
     if (trim(line).empty()) continue;
-    std::vector<std::string> cells;
-    std::stringstream row(line);
-    for (std::string cell; std::getline(row, cell, ',');) cells.push_back(cell);
+    const std::vector<std::string> cells = splitCsvRow(line);
     if (cells.size() <= std::max(time_column, status_column)) throw InputError(path + ":" + std::to_string(number) + ": too few columns");
     if (cells[status_column].rfind("fallback", 0) != 0) continue;
     unmeasured.insert(parseNumbers(cells[time_column], path, number).at(0));

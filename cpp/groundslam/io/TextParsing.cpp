@@ -31,6 +31,13 @@ std::vector<double> parseNumbers(const std::string& line, const std::string& fil
   return numbers;
 }
 
+std::vector<std::string> splitCsvRow(const std::string& line) {
+  std::vector<std::string> cells;
+  std::stringstream row(line);
+  for (std::string cell; std::getline(row, cell, ',');) cells.push_back(cell);
+  return cells;
+}
+
 bool naturalLess(const std::string& a, const std::string& b) {
   size_t i = 0, j = 0;
   while (i < a.size() && j < b.size()) {
