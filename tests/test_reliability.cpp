@@ -89,7 +89,7 @@ TEST(CraftedConfig, NumbersThatDoNotFitTheirKeyAreNamedWithFileAndLine) {
       {"list_as_key.yaml", "list_as_key.yaml:2: key 'camera.?': a key must be a plain name"},
       {"duplicate_key.yaml", "duplicate_key.yaml:3: key 'features.num_features': key given twice"},
       {"duplicate_section.yaml", "duplicate_section.yaml:3: key 'features': section given twice"},
-      {"second_document.yaml", "second_document.yaml:4: a second YAML document"},
+      {"second_document.yaml", "second_document.yaml:3: a second YAML document"},
   };
   for (const auto& [file, expected] : cases) {
     const std::string message = configErrorOf(file);

@@ -20,6 +20,22 @@ namespace fs = std::filesystem;
 namespace groundslam {
 namespace {
 
+/// The line (from 1) of a document marker (`---` or `...`) that follows content, 0 when there is none:
+/// YAML::Load would read the first document and silently drop the rest.
+int secondDocumentLine(const std::string& text) {
+  std::istringstream lines(text);
+  std::string line;
+  bool content = false;
+  for (int number = 1; std::getline(lines, line); ++number) {
+    const bool marker = (line.rfind("---", 0) == 0 || line.rfind("...", 0) == 0) &&
+                        (line.size() == 3 || line[3] == ' ' || line[3] == '\t' || line[3] == '\r');
+    if (marker && content) return number;
+    const auto first = line.find_first_not_of(" \t\r");
+    if (!marker && first != std::string::npos && line[first] != '#') content = true;
+  }
+  return 0;
+}
+
 /// An integer field's range, narrowed to what an int holds.
 Range integerRange(Range range) {
   range.min = std::max(range.min, static_cast<double>(std::numeric_limits<int>::min()));
@@ -216,18 +232,17 @@ class FieldWriter {
 }  // namespace
 
 void ConfigLoader::applyText(const std::string& yaml_text, const std::string& source) {
-  std::vector<YAML::Node> documents;
+  if (const int line = secondDocumentLine(yaml_text)) {
+    throw InputError(source + ":" + std::to_string(line) + ": a second YAML document; a configuration file holds one");
+  }
+  YAML::Node root;
   try {
-    documents = YAML::LoadAll(yaml_text);
+    root = YAML::Load(yaml_text);  // not LoadAll: yaml-cpp 0.7's LoadAll never returns on some broken inputs
   } catch (const YAML::Exception& e) {
     throw InputError(source + ":" + std::to_string(e.mark.line + 1) + ": invalid YAML: " + e.msg);
   }
   sources_.push_back(source);
-  if (documents.size() > 1) {
-    throw InputError(where(source, documents[1]) + ": a second YAML document; a configuration file holds one");
-  }
-  if (documents.empty() || documents[0].IsNull()) return;
-  const YAML::Node& root = documents[0];
+  if (root.IsNull()) return;
   if (!root.IsMap()) throw InputError(where(source, root) + ": expected a YAML mapping of sections (camera:, features:, ...)");
   try {
     FieldReader reader(root, source, set_keys_);
