@@ -3,17 +3,7 @@
 # same simulated floor (other path, other seed, wet) is localized image by image (`localize`) and tracked on
 # the map (`run --map`); a corrupt map is refused with its name.
 set -u
-bin=$1
-tmp=$2
-rm -rf "$tmp" && mkdir -p "$tmp"
-cd "$tmp" || exit 1
-failures=0
-passes=0
-check() {  # check NAME CONDITION...
-  local name=$1
-  shift
-  if "$@"; then passes=$((passes + 1)); else echo "FAIL $name"; failures=$((failures + 1)); fi
-}
+source "$(dirname "$0")/checks.sh" "$1" "$2"
 
 "$bin" simulate first --path lawnmower --frames 250 --lane-length-m 0.3 --ground-seed 5 --ground-size-m 1.2 --seed 1 >/dev/null
 "$bin" simulate second --path random_walk --area-m 0.15 --frames 40 --ground-seed 5 --ground-size-m 1.2 --seed 2 --wet-after 0 >/dev/null
@@ -50,5 +40,4 @@ check "the refusal names the file" grep -qF "truncated.gsmap: map file is" <<<"$
 out=$("$bin" run second/sequence.txt --map truncated.gsmap --out bad 2>&1); status=$?
 check "run --map refuses it too" [ $status -eq 2 ]
 check "and leaves no output folder" [ ! -e bad ]
-echo "$passes passed, $failures failed"
-[ $failures -eq 0 ]
+finish_checks

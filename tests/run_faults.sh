@@ -3,18 +3,7 @@
 # SIGTERM mid-run, a planted symbolic link, a full disk (a file size limit), an unwritable folder, the
 # default output folder, and results that have nothing to compare. Nothing the user had may be lost.
 set -u
-bin=$1
-tmp=$2
-rm -rf "$tmp" && mkdir -p "$tmp"
-cd "$tmp" || exit 1
-failures=0
-passes=0
-
-check() {  # check NAME CONDITION...
-  local name=$1
-  shift
-  if "$@"; then passes=$((passes + 1)); else echo "FAIL $name"; failures=$((failures + 1)); fi
-}
+source "$(dirname "$0")/checks.sh" "$1" "$2"
 digest() { find "$1" -type f -print0 | sort -z | xargs -0 md5sum | md5sum; }
 
 "$bin" simulate seq --frames 40 --resolution 160x120 >/dev/null
@@ -107,5 +96,4 @@ out=$("$bin" vocabulary train black/images -o black.gslmvoc 2>&1); status=$?
 check "no vocabulary from black images" [ $status -eq 2 ] && [ ! -e black.gslmvoc ]
 check "the refusal says why" grep -qF "hold 0 ORB features" <<<"$out"
 
-echo "$passes passed, $failures failed"
-[ $failures -eq 0 ]
+finish_checks
