@@ -20,7 +20,6 @@
 #include "groundslam/io/RunFolder.hpp"
 #include "groundslam/io/Tum.hpp"
 #include "groundslam/eval/TrajectoryMetrics.hpp"
-#include "groundslam/io/VocabularyFile.hpp"
 #include "groundslam/localization/GlobalLocalizer.hpp"
 #include "groundslam/pipeline/FramePreparer.hpp"
 
@@ -96,11 +95,10 @@ std::string accuracySummary(const std::vector<Localized>& rows, const Trajectory
 void localize(const LocalizeOptions& o) {
   const Dataset dataset = openDataset(o.dataset);
   const Config config = loadDatasetConfig(dataset.camera_yaml, o.config);
-  const std::string vocabulary_path = config.loop_closure.vocabulary.empty() ? defaultVocabularyPath() : config.loop_closure.vocabulary;
-  const auto vocabulary = std::make_shared<const Vocabulary>(readVocabulary(vocabulary_path));
+  const auto vocabulary = loadVocabulary(config);
   const FeatureMap map = readMap(o.map, vocabulary);
   const std::string target = o.out_dir.empty() ? newRunFolderName("runs") : o.out_dir;
-  RunFolder folder(target, {o.dataset, o.config, dataset.camera_yaml.value_or(""), o.map, vocabulary_path});
+  RunFolder folder(target, {o.dataset, o.config, dataset.camera_yaml.value_or(""), o.map, vocabularyPath(config)});
   installStopHandlers();
   writeNewFile(folder.path("config.yaml"), configToYaml(config));
   const FramePreparer preparer(config);
@@ -132,9 +130,7 @@ void localize(const LocalizeOptions& o) {
     std::cout << accuracySummary(rows, groundtruth);
   }
   const bool interrupted = rows.size() < dataset.frames.size();
-  writeNewFile(folder.path("run.yaml"), std::string("# groundslam localize folder\nstatus: ") + (interrupted ? "interrupted" : "complete") +
-                                            "\nframes_processed: " + std::to_string(rows.size()) +
-                                            "\nframes_total: " + std::to_string(dataset.frames.size()) + "\n");
+  writeNewFile(folder.path("run.yaml"), runStatusYaml("localize", rows.size(), dataset.frames.size(), o.dataset));
   const std::string where = interrupted ? folder.commitPartial() : folder.commit();
   if (o.out_dir.empty()) pointLatestAt("runs", where);
   std::cout << "results in " << where << "\n";

@@ -20,7 +20,6 @@
 #include "groundslam/io/RunFolder.hpp"
 #include "groundslam/io/RunFiles.hpp"
 #include "groundslam/io/Tum.hpp"
-#include "groundslam/io/VocabularyFile.hpp"
 #include "groundslam/pipeline/Slam.hpp"
 
 namespace fs = std::filesystem;
@@ -48,19 +47,6 @@ Config loadRunConfig(const Dataset& dataset, const RunOptions& o) {
   Config config = loadDatasetConfig(dataset.camera_yaml, o.config);
   if (o.no_loop_closure) config.loop_closure.enabled = false;
   return config;
-}
-
-std::string vocabularyPath(const Config& config) {
-  return config.loop_closure.vocabulary.empty() ? defaultVocabularyPath() : config.loop_closure.vocabulary;
-}
-
-std::shared_ptr<const Vocabulary> loadVocabulary(const Config& config) {
-  if (!config.loop_closure.enabled) return nullptr;
-  try {
-    return std::make_shared<const Vocabulary>(readVocabulary(vocabularyPath(config)));
-  } catch (const InputError& e) {
-    throw InputError(std::string("key 'loop_closure.vocabulary': ") + e.what());
-  }
 }
 
 /// Runs the frames through the pipeline until the last one or a stop signal, with a progress line on a
@@ -100,23 +86,10 @@ std::vector<FrameResult> processAll(const Dataset& dataset, const Config& config
   return results;
 }
 
-/// A YAML single-quoted string: quotes doubled.
-std::string quoted(const std::string& text) {
-  std::string out = "'";
-  for (char c : text) out += c == '\'' ? std::string("''") : std::string(1, c);
-  return out + "'";
-}
-
-std::string runYaml(const RunOptions& o, const RunProgress& progress) {
-  return "# groundslam run folder\nstatus: " + std::string(progress.interrupted() ? "interrupted" : "complete") +
-         "\nframes_processed: " + std::to_string(progress.processed) + "\nframes_total: " + std::to_string(progress.total) +
-         "\ndataset: " + quoted(o.dataset) + "\n";
-}
-
 /// Runs SLAM on the dataset and writes every result file into `folder`, a fresh folder of this run's own.
 RunProgress runInto(const std::string& folder, const RunOptions& o, const Dataset& dataset, const Config& config) {
   const auto file = [&](const char* name) { return (fs::path(folder) / name).string(); };
-  const std::shared_ptr<const Vocabulary> vocabulary = loadVocabulary(config);
+  const std::shared_ptr<const Vocabulary> vocabulary = config.loop_closure.enabled ? loadVocabulary(config) : nullptr;
   Slam slam(config, vocabulary);
   if (!o.map.empty()) {
     if (!vocabulary) throw InputError("--map " + o.map + ": a prior map needs loop closure (drop --no-loop-closure)");
@@ -152,7 +125,7 @@ RunProgress runInto(const std::string& folder, const RunOptions& o, const Datase
   }
   writeNewFile(file("candidates.csv"), formatCandidatesCsv(slam.loopCandidates(), truths));
   writeNewFile(file("trajectory.tum"), formatTum(trajectory));
-  writeNewFile(file("run.yaml"), runYaml(o, progress));  // last: its status says whether the run finished
+  writeNewFile(file("run.yaml"), runStatusYaml("run", progress.processed, progress.total, o.dataset));  // last: its status says whether the run finished
   return progress;
 }
 

@@ -2,6 +2,9 @@
 
 #include <cstdio>
 
+#include "groundslam/io/InputError.hpp"
+#include "groundslam/io/VocabularyFile.hpp"
+
 namespace groundslam::apps {
 
 std::string formatFramesCsv(const std::vector<FrameResult>& results, const std::vector<double>& load_ms) {
@@ -35,6 +38,26 @@ std::string runMetricsJson(const TrajectoryMetrics& trajectory, const LoopClosur
   for (char ch : loop_json) nested += ch == '\n' ? std::string("\n  ") : std::string(1, ch);
   json = json.substr(0, json.rfind('\n', end - 1)) + ",\n  \"loop_closure\": " + nested + "\n}\n";
   return json;
+}
+
+std::string vocabularyPath(const Config& config) {
+  return config.loop_closure.vocabulary.empty() ? defaultVocabularyPath() : config.loop_closure.vocabulary;
+}
+
+std::shared_ptr<const Vocabulary> loadVocabulary(const Config& config) {
+  try {
+    return std::make_shared<const Vocabulary>(readVocabulary(vocabularyPath(config)));
+  } catch (const InputError& e) {
+    throw InputError(std::string("key 'loop_closure.vocabulary': ") + e.what());
+  }
+}
+
+std::string runStatusYaml(const std::string& what, size_t processed, size_t total, const std::string& dataset) {
+  std::string quoted = "'";  // YAML single-quoted: quotes doubled
+  for (char c : dataset) quoted += c == '\'' ? std::string("''") : std::string(1, c);
+  return "# groundslam " + what + " folder\nstatus: " + (processed < total ? "interrupted" : "complete") +
+         "\nframes_processed: " + std::to_string(processed) + "\nframes_total: " + std::to_string(total) +
+         "\ndataset: " + quoted + "'\n";
 }
 
 std::string defaultVocabularyPath() {

@@ -1,10 +1,13 @@
 #pragma once
 // Formatting of a run's per-frame table and metrics.
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "groundslam/eval/LoopClosureMetrics.hpp"
 #include "groundslam/eval/TrajectoryMetrics.hpp"
+#include "groundslam/bow/Vocabulary.hpp"
+#include "groundslam/pipeline/Config.hpp"
 #include "groundslam/pipeline/FrameResult.hpp"
 
 namespace groundslam::apps {
@@ -18,5 +21,11 @@ int countLoopClosures(const std::vector<FrameResult>& results);
 std::string runMetricsJson(const TrajectoryMetrics& trajectory, const LoopClosureMetrics& loops);
 /// The path of the vocabulary shipped with groundslam.
 std::string defaultVocabularyPath();
+/// The vocabulary a configuration names (`loop_closure.vocabulary`), or the shipped one.
+std::string vocabularyPath(const Config& config);
+/// Reads that vocabulary; errors name the key. Throws InputError.
+std::shared_ptr<const Vocabulary> loadVocabulary(const Config& config);
+/// `run.yaml` of a run folder: `status: complete` or `interrupted`, frames processed and in the dataset.
+std::string runStatusYaml(const std::string& what, size_t processed, size_t total, const std::string& dataset);
 
 }  // namespace groundslam::apps

@@ -7,7 +7,6 @@
 #include <limits>
 #include <fstream>
 #include <map>
-#include <iomanip>
 #include <sstream>
 
 #include <yaml-cpp/yaml.h>
@@ -106,13 +105,7 @@ class FieldReader {
 
   void checkRange(const YAML::Node& node, const std::string& name, double value, const Range& range) const {
     if (!std::isfinite(value)) fail(source_, node, name, "'" + node.Scalar() + "' is not a finite number");
-    const bool below = range.min_exclusive ? value <= range.min : value < range.min;
-    if (below || value > range.max) {
-      std::ostringstream msg;
-      msg << std::setprecision(12) << "value " << value << " out of range " << (range.min_exclusive ? "(" : "[") << range.min << ", "
-          << range.max << "]";
-      fail(source_, node, name, msg.str());
-    }
+    if (const auto problem = rangeProblem(value, range)) fail(source_, node, name, *problem);
   }
 
   void read(const YAML::Node& node, const std::string& name, double& field, const Range& range) const {

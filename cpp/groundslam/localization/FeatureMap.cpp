@@ -77,12 +77,6 @@ bool FeatureMap::alreadyMapped(const Eigen::Vector2d& position, const std::uint8
   return false;
 }
 
-void FeatureMap::moveSegment(int segment, const Pose2& correction) {
-  for (MapAnchor& a : anchors_) {
-    if (a.segment == segment) a.T_map_anchor = correction * a.T_map_anchor;
-  }
-}
-
 void FeatureMap::mergeSegment(int from, int to) {
   for (MapAnchor& a : anchors_) {
     if (a.segment == from) a.segment = to;

@@ -52,8 +52,6 @@ class FeatureMap {
   int addStoredAnchor(const MapAnchor& anchor);
   /// After an optimisation: the anchor's new pose (its features move with it).
   void moveAnchor(int anchor, const Pose2& T_map_anchor) { anchors_[static_cast<size_t>(anchor)].T_map_anchor = T_map_anchor; }
-  /// Every anchor of a segment moves by the same correction: T_map_anchor <- correction * T_map_anchor.
-  void moveSegment(int segment, const Pose2& correction);
   /// Anchors from now on belong to `to` instead of `from` (a segment joined to the map).
   void mergeSegment(int from, int to);
 
@@ -68,7 +66,7 @@ class FeatureMap {
   const std::vector<std::uint32_t>& featuresOf(int anchor) const { return features_of_anchor_[static_cast<size_t>(anchor)]; }
   /// Anchors whose position lies within `radius_m` of `where`.
   std::vector<int> anchorsNear(const Eigen::Vector2d& where, double radius_m) const;
-  /// Bytes held per feature (features and postings), for the memory budget.
+  /// Bytes the map holds (features, postings, keyframe lists, dedup grid, keyframes), for the memory budget.
   size_t bytes() const;
 
  private:

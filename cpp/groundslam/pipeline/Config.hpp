@@ -92,6 +92,9 @@ CameraIntrinsics intrinsicsOf(const CameraConfig& camera);
 /// Keys that a configuration must set (conventions.md): "section.key".
 const std::vector<std::string>& requiredConfigKeys();
 
+/// "value V out of range [min, max]" (or "is not a finite number") when `value` is not allowed by `range`.
+std::optional<std::string> rangeProblem(double value, const Range& range);
+
 /// A key whose value cannot be used: "section.key" and what is wrong with it.
 struct ConfigProblem {
   std::string key;

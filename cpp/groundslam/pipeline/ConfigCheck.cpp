@@ -21,16 +21,7 @@ class RangeChecker {
 
  private:
   void check(const std::string& name, double value, const Range& range) {
-    if (!std::isfinite(value)) {
-      problem = ConfigProblem{name, "value " + std::to_string(value) + " is not a finite number"};
-      return;
-    }
-    const bool below = range.min_exclusive ? value <= range.min : value < range.min;
-    if (below || value > range.max) {
-      std::ostringstream msg;
-      msg << std::setprecision(12) << "value " << value << " out of range " << (range.min_exclusive ? "(" : "[") << range.min << ", " << range.max << "]";
-      problem = ConfigProblem{name, msg.str()};
-    }
+    if (const auto message = rangeProblem(value, range)) problem = ConfigProblem{name, *message};
   }
   void check(const std::string& name, int value, const Range& range) { check(name, static_cast<double>(value), range); }
   void check(const std::string&, bool, const Range&) {}
@@ -84,6 +75,16 @@ std::optional<ConfigProblem> pyramidProblem(const Config& config) {
 }
 
 }  // namespace
+
+std::optional<std::string> rangeProblem(double value, const Range& range) {
+  if (!std::isfinite(value)) return "value " + std::to_string(value) + " is not a finite number";
+  const bool below = range.min_exclusive ? value <= range.min : value < range.min;
+  if (!below && value <= range.max) return std::nullopt;
+  std::ostringstream msg;
+  msg << std::setprecision(12) << "value " << value << " out of range " << (range.min_exclusive ? "(" : "[") << range.min << ", "
+      << range.max << "]";
+  return msg.str();
+}
 
 std::optional<ConfigProblem> findConfigProblem(const Config& config) {
   RangeChecker ranges;

@@ -237,10 +237,10 @@ LoopCandidate LoopCloser::candidateFrom(const Localization& localization, int fr
 
 void LoopCloser::adoptPriorMap(const FeatureMap& prior) {
   for (size_t a = 0; a < prior.anchors().size(); ++a) {
-    feature_map_.addStoredAnchor({static_cast<int>(a), prior.anchors()[a].T_map_anchor, 0});
+    feature_map_.addStoredAnchor({static_cast<int>(a), prior.anchors()[a].T_map_anchor, kMapSegment});
   }
   for (const MapFeature& f : prior.features()) feature_map_.addStoredFeature(f);
-  segment_of_frame_.assign(prior.anchors().size(), 0);
+  segment_of_frame_.assign(prior.anchors().size(), kMapSegment);
   path_length_m_.assign(prior.anchors().size(), 0.0);
 }
 
@@ -267,7 +267,7 @@ std::optional<LoopCandidate> LoopCloser::localizeOnPriorMap(int frame, const Gro
 std::vector<LoopCandidate> LoopCloser::relocalize(int frame, const GroundFeatures& features, const std::vector<Pose2>& estimates) {
   const int lost_segment = segmentOf(frame);
   AnchorFilter usable(feature_map_.anchors().size());
-  for (size_t a = 0; a < usable.size(); ++a) usable[a] = feature_map_.anchors()[a].segment != lost_segment;
+  for (size_t a = 0; a < usable.size(); ++a) usable[a] = feature_map_.anchors()[a].segment == kMapSegment;
   const Localization localization = localizeGlobally(feature_map_, features, localization_, fitting_, usable);
   if (!localization.ok()) return {};
   // One localization could be a lookalike; the next must agree with what odometry measured in between.
@@ -285,11 +285,10 @@ std::vector<LoopCandidate> LoopCloser::relocalize(int frame, const GroundFeature
     return {};
   }
   pending_localization_.reset();
-  const int map_segment = feature_map_.anchors()[static_cast<size_t>(localization.anchor)].segment;
   for (int& segment : segment_of_frame_) {
-    if (segment == lost_segment) segment = map_segment;
+    if (segment == lost_segment) segment = kMapSegment;
   }
-  feature_map_.mergeSegment(lost_segment, map_segment);
+  feature_map_.mergeSegment(lost_segment, kMapSegment);
   std::vector<LoopCandidate> joined = {candidateFrom(earlier.localization, earlier.frame), candidateFrom(localization, frame)};
   recent_loops_.emplace_back(joined.back().frame_a, frame);
   if (recent_loops_.size() > kRecentLoops) recent_loops_.pop_front();

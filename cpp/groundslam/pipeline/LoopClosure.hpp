@@ -26,6 +26,10 @@
 
 namespace groundslam {
 
+/// The segment tied to the map frame: the run's first frames (or a prior map's keyframes). A lost segment
+/// joins it when it relocalizes.
+constexpr int kMapSegment = 0;
+
 struct LoopClosureSettings {
   bool enabled = true;               ///< false: odometry only
   std::string vocabulary;            ///< vocabulary file; empty: the default shipped with groundslam
@@ -81,9 +85,10 @@ class LoopCloser {
   /// segment (a new one starts when tracking is lost; prior-guided candidates never cross segments, whose
   /// relative drift is unknown). Returns every candidate verified.
   std::vector<LoopCandidate> process(int frame, int segment, const GroundFeatures& features, const std::vector<Pose2>& estimates);
-  /// While tracking is lost: localizes the frame globally on the map of the other segments (no prior). A
-  /// localization is accepted when the next one agrees with odometry; then both are returned as loop
-  /// candidates (frame_a: the map keyframe, frame_b: the lost frame) and the frame's segment joins the map's.
+  /// While tracking is lost: localizes the frame globally on the keyframes of the map segment (no prior;
+  /// another lost segment has a frame of its own and cannot place this one). A localization is accepted
+  /// when the next one agrees with odometry; then both are returned as loop candidates (frame_a: the map
+  /// keyframe, frame_b: the lost frame) and the frame's segment joins the map segment.
   std::vector<LoopCandidate> relocalize(int frame, const GroundFeatures& features, const std::vector<Pose2>& estimates);
   /// Takes a prior map (a map file of an earlier session): its keyframes are frames 0..K-1 of segment 0,
   /// before any frame of this session.
@@ -93,7 +98,6 @@ class LoopCloser {
   /// correction, and returned as a loop candidate.
   std::optional<LoopCandidate> localizeOnPriorMap(int frame, const GroundFeatures& features, const std::vector<Pose2>& estimates,
                                                   int prior_frames);
-  /// The segment a relocalization joined the lost segment to (valid after relocalize returned candidates).
   int segmentOf(int frame) const { return segment_of_frame_[static_cast<size_t>(frame)]; }
   /// Re-files the places of frames from `first_moved` on under their current estimates, after an
   /// optimisation moved them.

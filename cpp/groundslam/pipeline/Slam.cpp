@@ -21,6 +21,12 @@ std::pair<std::vector<Eigen::Vector2d>, std::vector<Eigen::Vector2d>> matchedPoi
   return {train_points, query_points};
 }
 
+/// An edge that keeps the graph connected (and a new segment's frame defined) without claiming to know the
+/// motion: a standard deviation of 100 m and 100 rad.
+GraphEdge informationFreeEdge(int from, int to, const Pose2& T_from_to) {
+  return {from, to, T_from_to, Eigen::Vector3d(1e-4, 1e-4, 1e-4).asDiagonal(), false};
+}
+
 }  // namespace
 
 Slam::Slam(const Config& config, std::shared_ptr<const Vocabulary> vocabulary)
@@ -64,7 +70,7 @@ FrameResult Slam::process(PreparedFrame prepared) {
   } else if (prior_frames_ > 0) {
     // On a prior map the first frame's pose is unknown until global localization finds it.
     graph_.addPose(Pose2());
-    graph_.addEdge({0, frame, Pose2(), Eigen::Vector3d(1e-4, 1e-4, 1e-4).asDiagonal(), false});
+    graph_.addEdge(informationFreeEdge(0, frame, Pose2()));
     result.status = "lost";
     measured_.push_back(false);
   } else {
@@ -98,11 +104,10 @@ void Slam::addToGraph(const OdometryEdge& odometry) {
 }
 
 void Slam::startSegment(const OdometryEdge& failed) {
-  // An edge with next to no information keeps the graph connected (and the new segment's frame defined)
-  // without pretending the motion is known; the relocalization edge will decide where the segment lies.
+  // The relocalization edge, not this one, will decide where the new segment lies.
   const int from = static_cast<int>(graph_.poses().size()) - 1;
   const int to = graph_.addPose(graph_.poses().back() * failed.T_prev_curr);
-  graph_.addEdge({from, to, failed.T_prev_curr, Eigen::Vector3d(1e-4, 1e-4, 1e-4).asDiagonal(), false});
+  graph_.addEdge(informationFreeEdge(from, to, failed.T_prev_curr));
   ++segment_;
   lost_ = true;
   lost_since_ = to;
@@ -120,7 +125,7 @@ void Slam::relocalize(const Keyframe& current, FrameResult& result) {
     ++result.loop_closures;
   }
   // The frames since the loss snap into place: the whole graph is optimised now.
-  segment_ = loop_closer_->segmentOf(current.index);
+  segment_ = kMapSegment;
   for (size_t i = static_cast<size_t>(lost_since_); i < measured_.size(); ++i) measured_[i] = true;
   lost_ = false;
   result.status = "relocalized";
@@ -139,7 +144,7 @@ void Slam::usePriorMap(const FeatureMap& prior) {
   }
   loop_closer_->adoptPriorMap(prior);
   prior_frames_ = static_cast<int>(prior.anchors().size());
-  segment_ = 1;
+  segment_ = kMapSegment + 1;
   lost_ = true;
   lost_since_ = prior_frames_;
 }

@@ -53,7 +53,7 @@ class Slam {
   /// The feature map of global localization (null when loop closure is disabled), and the segment whose
   /// keyframes are tied to the map frame (what a map file keeps).
   const FeatureMap* featureMap() const { return loop_closer_ ? &loop_closer_->featureMap() : nullptr; }
-  int mapSegment() const { return 0; }
+  int mapSegment() const { return kMapSegment; }
 
   /// Processes the next image (8-bit grey) of the sequence: prepareFrame, then process.
   FrameResult process(const cv::Mat& image, double timestamp);
@@ -105,7 +105,7 @@ class Slam {
   bool window_solved_ = false;          ///< a windowed optimisation ran since the last full one
   int last_optimised_frame_ = -1000000;
   bool optimise_now_ = false;  ///< a relocalization joined a segment: optimise the whole graph at once
-  int segment_ = 0;            ///< the current tracking segment
+  int segment_ = kMapSegment;  ///< the current tracking segment
   bool lost_ = false;          ///< tracking was lost and the current segment is not yet joined to the map
   int lost_since_ = 0;         ///< first frame of the current segment
   int prior_frames_ = 0;       ///< graph poses 0..prior_frames_-1 are a prior map's keyframes, held fixed
