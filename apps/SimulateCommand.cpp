@@ -32,6 +32,8 @@ struct SimulateOptions {
   double turn_deg = sim::PathSettings{}.max_turn_rad * 180.0 / M_PI;
   std::vector<std::string> gaps;  ///< FROM:TO ranges of path frames that are not written (a carried robot)
   std::uint64_t ground_seed = 0;  ///< 0: the ground follows --seed and covers the path only
+  double drop_probability = 0.0;  ///< chance per frame that the camera starts dropping frames
+  int drop_max = 8;               ///< longest run of dropped frames
   sim::SimulationSettings settings;
 };
 
@@ -91,6 +93,9 @@ std::string describe(const sim::SimulationSettings& s, const SimulateOptions& o)
       << "\nwet_after: " << s.wet_after << "\nnoise_sigma: " << s.photometry.noise_sigma
       << "\ndefocus_sigma_px: " << s.photometry.defocus_sigma_px
       << "\nexposure_variation: " << s.photometry.exposure_variation << "\nvignetting: " << s.photometry.vignetting
+      << "\nheight_jitter_m: " << s.height_jitter_m << "\nshadow: " << s.artifacts.shadow << "\nlens_dirt: " << s.artifacts.lens_dirt
+      << "\nglare: " << s.artifacts.glare << "\nspin_every: " << s.motion.spin_every << "\nspin_deg: " << s.motion.spin_deg
+      << "\ndrop_frames: " << o.drop_probability << "\ndrop_max: " << o.drop_max
       << "\nseed: " << s.seed << "\nground_seed: " << o.ground_seed << "\nground_size_m: " << s.ground_size_m << "\ngaps: [";
   for (size_t i = 0; i < o.gaps.size(); ++i) out << (i ? ", " : "") << "'" << o.gaps[i] << "'";
   out << "]\n";
@@ -120,7 +125,13 @@ void simulate(SimulateOptions& o) {
   std::vector<StampedPose> groundtruth;
   std::vector<std::pair<int, int>> gaps;
   for (const std::string& gap : o.gaps) gaps.push_back(parseGap(gap));
-  const auto inGap = [&](int i) { return std::any_of(gaps.begin(), gaps.end(), [&](const auto& g) { return i >= g.first && i < g.second; }); };
+  const std::vector<bool> dropped = sim::droppedFrames(simulator.frameCount(), o.drop_probability, o.drop_max, settings.seed);
+  const auto inGap = [&](int i) {
+    return dropped[static_cast<size_t>(i)] ||
+           std::any_of(gaps.begin(), gaps.end(), [&](const auto& g) { return i >= g.first && i < g.second; });
+  };
+  std::ostringstream mount_csv;
+  mount_csv << "index,path_frame,roll_deg,pitch_deg,height_m\n";
   Progress progress("simulate", simulator.frameCount());
   for (int i = 0; i < simulator.frameCount(); ++i) {
     if (inGap(i)) continue;
@@ -132,11 +143,17 @@ void simulate(SimulateOptions& o) {
     images.push_back(name);
     homographies.push_back(mapHomographyFromRobotPose(pose, settings.camera, meters_per_pixel));
     groundtruth.push_back({static_cast<double>(images.size() - 1), pose});  // timestamps are list indices
+    const Eigen::Vector3d mount = simulator.mountStateAt(i);
+    char row[160];
+    std::snprintf(row, sizeof(row), "%zu,%d,%.6f,%.6f,%.6f\n", images.size() - 1, i, mount.x() * 180.0 / M_PI,
+                  mount.y() * 180.0 / M_PI, mount.z());
+    mount_csv << row;
     progress.update(i + 1);
   }
   progress.finish();
   writeFileAtomically((fs::path(o.out_dir) / "camera.yaml").string(), configToYaml(config, {"camera", "dataset"}));
   writeTum((fs::path(o.out_dir) / "groundtruth.tum").string(), groundtruth);
+  writeFileAtomically((fs::path(o.out_dir) / "mount.csv").string(), mount_csv.str());
   writeFileAtomically((fs::path(o.out_dir) / "simulation.yaml").string(), describe(settings, o));
   // The list goes last: a sequence without its list is visibly incomplete.
   const std::string list = (fs::path(o.out_dir) / (o.name + ".txt")).string();
@@ -193,6 +210,20 @@ void addSimulateCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--ground-size-m", o->settings.ground_size_m, "With --ground-seed: side of the ground square")
       ->check(CLI::Range(0.1, 20.0))->capture_default_str();
+  cmd->add_option("--height-jitter-m", o->settings.height_jitter_m, "Camera height jitter, metres (std, smooth over time)")
+      ->check(CLI::Range(0.0, 0.05))->capture_default_str();
+  cmd->add_option("--shadow", o->settings.artifacts.shadow, "Darkness of the robot's own shadow, 0-1 (its edge turns with the heading)")
+      ->check(CLI::Range(0.0, 1.0))->capture_default_str();
+  cmd->add_option("--lens-dirt", o->settings.artifacts.lens_dirt, "Dark blotches fixed on the lens")->check(CLI::Range(0, 100))->capture_default_str();
+  cmd->add_option("--glare", o->settings.artifacts.glare, "Peak of a bright patch fixed in the image (1 saturates)")
+      ->check(CLI::Range(0.0, 5.0))->capture_default_str();
+  cmd->add_option("--spin-every", o->settings.motion.spin_every,
+                  "Every N frames the robot turns sharply on the spot by --spin-deg, half a period later back (0: never)")
+      ->check(CLI::Range(0, 1000000))->capture_default_str();
+  cmd->add_option("--spin-deg", o->settings.motion.spin_deg, "Size of each sharp turn, degrees")->check(CLI::Range(0.0, 180.0))->capture_default_str();
+  cmd->add_option("--drop-frames", o->drop_probability, "Chance per frame that the camera drops the next 1 to --drop-max frames")
+      ->check(CLI::Range(0.0, 0.5))->capture_default_str();
+  cmd->add_option("--drop-max", o->drop_max, "Longest run of dropped frames")->check(CLI::Range(1, 1000))->capture_default_str();
   cmd->add_option("--gap", o->gaps, "FROM:TO: leave out path frames FROM <= i < TO (the robot is carried; repeatable)");
   cmd->callback([o]() { simulate(*o); });
 }

@@ -1,5 +1,7 @@
 #include "groundslam/sim/Renderer.hpp"
 
+#include <algorithm>
+
 #include <opencv2/imgproc.hpp>
 
 namespace groundslam::sim {
@@ -20,9 +22,11 @@ GroundRenderer::GroundRenderer(const CameraModel& camera, int supersampling)
 }
 
 cv::Mat GroundRenderer::render(const GroundTexture& texture, const Pose2& T_world_robot,
-                               const Eigen::Isometry3d& T_robot_camera) const {
+                               const Eigen::Isometry3d& T_robot_camera, const GroundShadow& shadow) const {
   const int w = camera_.intrinsics().width * supersampling_, h = camera_.intrinsics().height * supersampling_;
   cv::Mat map_col(h, w, CV_32F), map_row(h, w, CV_32F);
+  const bool shaded = shadow.darkness > 0.0;
+  cv::Mat light = shaded ? cv::Mat(h, w, CV_32F) : cv::Mat();
   const Eigen::Matrix3d R = T_robot_camera.linear();
   const Eigen::Vector3d origin = T_robot_camera.translation();
   const double c = std::cos(T_world_robot.theta), s = std::sin(T_world_robot.theta);
@@ -38,10 +42,17 @@ cv::Mat GroundRenderer::render(const GroundTexture& texture, const Pose2& T_worl
       const double xw = c * xr - s * yr + T_world_robot.x, yw = s * xr + c * yr + T_world_robot.y;
       col_ptr[col] = static_cast<float>((xw - texture.x_min_m) * inv_texel - 0.5);
       row_ptr[col] = static_cast<float>((texture.y_max_m - yw) * inv_texel - 0.5);
+      if (shaded) {
+        // Smoothstep across the penumbra: 0 in the light, 1 deep in the shadow.
+        const double depth = (shadow.direction_robot.dot(Eigen::Vector2d(xr, yr)) - shadow.offset_m) / shadow.softness_m;
+        const double u = std::clamp(0.5 + 0.5 * depth, 0.0, 1.0);
+        light.ptr<float>(row)[col] = static_cast<float>(1.0 - shadow.darkness * u * u * (3.0 - 2.0 * u));
+      }
     }
   }
   cv::Mat radiance;
   cv::remap(texture.albedo, radiance, map_col, map_row, cv::INTER_LINEAR, cv::BORDER_REFLECT_101);
+  if (shaded) radiance = radiance.mul(light);
   if (supersampling_ > 1) {
     cv::resize(radiance, radiance, cv::Size(camera_.intrinsics().width, camera_.intrinsics().height), 0, 0, cv::INTER_AREA);
   }

@@ -14,13 +14,23 @@
 
 namespace groundslam::sim {
 
+/// A shadow on the ground, fixed to the robot: the ground beyond a straight edge is darkened. The edge is
+/// the line {p : direction . p = offset} in the robot frame, softened over `softness_m` (the penumbra).
+struct GroundShadow {
+  Eigen::Vector2d direction_robot = Eigen::Vector2d::UnitX();  ///< unit normal of the edge, pointing into the shadow
+  double offset_m = 0.0;
+  double softness_m = 0.003;
+  double darkness = 0.0;  ///< 0: no shadow, 1: black
+};
+
 class GroundRenderer {
  public:
   /// `supersampling` rays per pixel along each axis, averaged (anti-aliasing).
   GroundRenderer(const CameraModel& camera, int supersampling);
 
   /// Radiance image (CV_32F, albedo units) seen from T_world_robot with the camera at T_robot_camera.
-  cv::Mat render(const GroundTexture& texture, const Pose2& T_world_robot, const Eigen::Isometry3d& T_robot_camera) const;
+  cv::Mat render(const GroundTexture& texture, const Pose2& T_world_robot, const Eigen::Isometry3d& T_robot_camera,
+                 const GroundShadow& shadow = GroundShadow()) const;
 
  private:
   CameraModel camera_;

@@ -44,20 +44,90 @@ SequenceSimulator::SequenceSimulator(const SimulationSettings& settings, const c
     const double innovation = sigma * std::sqrt(1.0 - keep * keep);
     jitter = keep * jitter + Eigen::Vector2d(rng.gaussian(innovation), rng.gaussian(innovation));
   }
+  cv::RNG height_rng(settings.seed * 131ULL + 5ULL);  // its own stream: earlier sequences stay as they were
+  double dh = height_rng.gaussian(settings.height_jitter_m);
+  for (size_t i = 0; i < poses_.size(); ++i) {
+    height_jitter_m_.push_back(dh);
+    dh = keep * dh + height_rng.gaussian(settings.height_jitter_m * std::sqrt(1.0 - keep * keep));
+  }
+  addHardMotion();
+  prepareArtifacts();
   dry_ = layTexture(user_texture);
   wet_ = dry_;
   if (settings.wet_after < 1.0) wet_.albedo = wetAlbedo(dry_.albedo, dry_.texel_m, settings.seed);
 }
 
-double SequenceSimulator::footprintRadius() const {
+void SequenceSimulator::addHardMotion() {
+  const int period = settings_.motion.spin_every;
+  spin_rad_.assign(poses_.size(), 0.0);
+  if (period <= 0) return;
+  // A square wave on the heading: the camera (above the robot's origin) turns on the spot, the path stays.
+  for (size_t i = 0; i < poses_.size(); ++i) {
+    const double spin = static_cast<int>(i) % period >= (period + 1) / 2 ? settings_.motion.spin_deg * M_PI / 180.0 : 0.0;
+    poses_[i].theta = wrapAngle(poses_[i].theta + spin);
+    spin_rad_[i] = spin;
+  }
+}
+
+void SequenceSimulator::prepareArtifacts() {
+  const CameraArtifacts& a = settings_.artifacts;
+  const auto& k = settings_.camera;
+  cv::RNG rng(settings_.seed * 257ULL + 11ULL);
+  const double sun = rng.uniform(0.0, 2.0 * M_PI);
+  sun_direction_world_ = Eigen::Vector2d(std::cos(sun), std::sin(sun));
+  // The edge passes a third of the footprint's radius from its centre: the shadow covers about a quarter.
+  shadow_offset_m_ = 0.35 * cornerRadius();
+  const double scale = k.width / 320.0;
+  if (a.lens_dirt > 0) {
+    dirt_ = cv::Mat(k.height, k.width, CV_32F, cv::Scalar(1.0f));
+    for (int b = 0; b < a.lens_dirt; ++b) {
+      const double u = rng.uniform(0.1, 0.9) * k.width, v = rng.uniform(0.1, 0.9) * k.height;
+      // Small sharp specks and large soft smudges.
+      const double sigma = scale * (b % 2 == 0 ? rng.uniform(1.5, 3.0) : rng.uniform(6.0, 14.0));
+      const double opacity = rng.uniform(0.4, 0.8);
+      for (int row = std::max(0, static_cast<int>(v - 4 * sigma)); row < std::min(k.height, static_cast<int>(v + 4 * sigma) + 1); ++row) {
+        for (int col = std::max(0, static_cast<int>(u - 4 * sigma)); col < std::min(k.width, static_cast<int>(u + 4 * sigma) + 1); ++col) {
+          const double r2 = ((col - u) * (col - u) + (row - v) * (row - v)) / (sigma * sigma);
+          dirt_.at<float>(row, col) *= static_cast<float>(1.0 - opacity * std::exp(-0.5 * r2));
+        }
+      }
+    }
+  }
+  if (a.glare > 0.0) {
+    glare_ = cv::Mat(k.height, k.width, CV_32F);
+    const double u = rng.uniform(0.25, 0.75) * k.width, v = rng.uniform(0.25, 0.75) * k.height, sigma = 0.1 * k.width;
+    for (int row = 0; row < k.height; ++row) {
+      for (int col = 0; col < k.width; ++col) {
+        const double r2 = ((col - u) * (col - u) + (row - v) * (row - v)) / (sigma * sigma);
+        glare_.at<float>(row, col) = static_cast<float>(a.glare * std::exp(-0.5 * r2));
+      }
+    }
+  }
+}
+
+GroundShadow SequenceSimulator::shadowAt(const Pose2& pose) const {
+  GroundShadow shadow;
+  shadow.darkness = settings_.artifacts.shadow;
+  shadow.direction_robot = Eigen::Rotation2Dd(-pose.theta) * sun_direction_world_;  // the sun stays, the robot turns
+  shadow.offset_m = shadow_offset_m_;
+  shadow.softness_m = 0.004;
+  return shadow;
+}
+
+double SequenceSimulator::cornerRadius() const {
   const auto& k = settings_.camera;
   double radius = 0.0;
   for (const Eigen::Vector2d& corner : {Eigen::Vector2d(0, 0), Eigen::Vector2d(k.width, 0), Eigen::Vector2d(0, k.height),
                                        Eigen::Vector2d(k.width, k.height)}) {
     if (const auto p = camera_.pixelToGround(corner)) radius = std::max(radius, p->norm());
   }
+  return radius;
+}
+
+double SequenceSimulator::footprintRadius() const {
   const double jitter_m = settings_.mounting_height_m * std::tan(4.0 * settings_.mount_jitter_deg * M_PI / 180.0);
-  return 1.1 * radius + jitter_m + 0.01;
+  const double height_m = 4.0 * settings_.height_jitter_m / settings_.mounting_height_m * cornerRadius();
+  return 1.1 * cornerRadius() + jitter_m + height_m + 0.01;
 }
 
 GroundTexture SequenceSimulator::layTexture(const cv::Mat& user_texture) const {
@@ -101,9 +171,14 @@ GroundTexture SequenceSimulator::layTexture(const cv::Mat& user_texture) const {
   return texture;
 }
 
+Eigen::Vector3d SequenceSimulator::mountStateAt(int index) const {
+  const Eigen::Vector2d& j = jitter_rad_[static_cast<size_t>(index)];
+  return Eigen::Vector3d(j.x(), j.y(), settings_.mounting_height_m + height_jitter_m_[static_cast<size_t>(index)]);
+}
+
 Eigen::Isometry3d SequenceSimulator::mountAt(int index) const {
   const Eigen::Vector2d& j = jitter_rad_[static_cast<size_t>(index)];
-  Eigen::Isometry3d T = defaultCameraMount(settings_.mounting_height_m);
+  Eigen::Isometry3d T = defaultCameraMount(mountStateAt(index).z());
   T.linear() = (Eigen::AngleAxisd(j.x(), Eigen::Vector3d::UnitX()) * Eigen::AngleAxisd(j.y(), Eigen::Vector3d::UnitY()))
                    .toRotationMatrix() *
                T.linear();
@@ -120,20 +195,38 @@ cv::Mat SequenceSimulator::renderFrame(int index) const {
     // Average renders over the exposure, centred on this frame's pose: cameras stamp mid-exposure. The
     // first frame is blurred by the motion towards the second: a moving camera's first image is not sharp.
     const size_t i = static_cast<size_t>(index);
-    const Pose2 motion = index > 0 ? between(poses_[i - 1], pose) : between(pose, poses_[i + 1]);
+    // The blur follows the path; a sharp turn happens between exposures.
+    const auto unspun = [&](size_t k) { return Pose2(poses_[k].x, poses_[k].y, poses_[k].theta - spin_rad_[k]); };
+    const Pose2 path_motion = index > 0 ? between(unspun(i - 1), unspun(i)) : between(unspun(i), unspun(i + 1));
+    const Eigen::Vector2d shift = Eigen::Rotation2Dd(-spin_rad_[i]) * path_motion.translation();
+    const Pose2 motion(shift.x(), shift.y(), path_motion.theta);
     const double blur_px = settings_.motion_blur * motion.translation().norm() / camera_.groundSampleDistance();
     const int samples = std::clamp(static_cast<int>(std::ceil(blur_px)) + 1, 2, 12);
     radiance = cv::Mat::zeros(settings_.camera.height, settings_.camera.width, CV_32F);
     for (int k = 0; k < samples; ++k) {
       const double u = settings_.motion_blur * (static_cast<double>(k) / (samples - 1) - 0.5);
       const Pose2 sub = pose * Pose2(u * motion.x, u * motion.y, u * motion.theta);
-      radiance += renderer_.render(texture, sub, mount);
+      radiance += renderer_.render(texture, sub, mount, shadowAt(sub));
     }
     radiance /= samples;
   } else {
-    radiance = renderer_.render(texture, pose, mount);
+    radiance = renderer_.render(texture, pose, mount, shadowAt(pose));
   }
+  if (!dirt_.empty()) radiance = radiance.mul(dirt_);
+  if (!glare_.empty()) radiance += glare_;
   return expose(radiance, settings_.photometry, index, settings_.seed);
+}
+
+std::vector<bool> droppedFrames(int frames, double probability, int max_gap, std::uint64_t seed) {
+  std::vector<bool> dropped(static_cast<size_t>(std::max(0, frames)), false);
+  if (probability <= 0.0 || max_gap < 1) return dropped;
+  cv::RNG rng(seed * 613ULL + 17ULL);
+  for (int i = 1; i + 1 < frames; ++i) {
+    if (rng.uniform(0.0, 1.0) >= probability) continue;
+    const int gap = rng.uniform(1, max_gap + 1);
+    for (int k = 0; k < gap && i + 1 < frames; ++k, ++i) dropped[static_cast<size_t>(i)] = true;
+  }
+  return dropped;
 }
 
 }  // namespace groundslam::sim

@@ -1,0 +1,122 @@
+#include "groundslam/core/MountEstimation.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include <ceres/ceres.h>
+
+namespace groundslam {
+namespace {
+
+/// Where a camera ray meets the ground for a mount state: the ray (already turned by the calibrated
+/// mount's rotation) is turned by pitch then roll and cast from the optical centre at `height`.
+template <typename T>
+void groundPoint(const Eigen::Vector3d& ray_robot, const Eigen::Vector2d& centre_xy, const T& roll, const T& pitch,
+                 const T& height, T* point) {
+  const T cp = ceres::cos(pitch), sp = ceres::sin(pitch), cr = ceres::cos(roll), sr = ceres::sin(roll);
+  const T x1 = cp * ray_robot.x() + sp * ray_robot.z();
+  const T y1 = T(ray_robot.y());
+  const T z1 = -sp * ray_robot.x() + cp * ray_robot.z();
+  const T y2 = cr * y1 - sr * z1;
+  const T z2 = sr * y1 + cr * z1;
+  const T s = -height / z2;
+  point[0] = centre_xy.x() + s * x1;
+  point[1] = centre_xy.y() + s * y2;
+}
+
+/// The misfit of one matched pair: the current ray's ground point moved by the motion, minus the
+/// reference ray's ground point, in units of the point noise.
+struct PairResidual {
+  PairResidual(const Eigen::Vector3d& reference_ray, const Eigen::Vector3d& current_ray, const Eigen::Vector2d& centre_xy,
+               double reference_height, double sigma)
+      : reference_ray_(reference_ray), current_ray_(current_ray), centre_xy_(centre_xy), reference_height_(reference_height),
+        inverse_sigma_(1.0 / sigma) {}
+  template <typename T>
+  bool operator()(const T* reference_tilt, const T* current, const T* motion, T* residual) const {
+    T p_ref[2], p_cur[2];
+    groundPoint(reference_ray_, centre_xy_, reference_tilt[0], reference_tilt[1], T(reference_height_), p_ref);
+    groundPoint(current_ray_, centre_xy_, current[0], current[1], current[2], p_cur);
+    const T c = ceres::cos(motion[2]), s = ceres::sin(motion[2]);
+    residual[0] = (c * p_cur[0] - s * p_cur[1] + motion[0] - p_ref[0]) * inverse_sigma_;
+    residual[1] = (s * p_cur[0] + c * p_cur[1] + motion[1] - p_ref[1]) * inverse_sigma_;
+    return true;
+  }
+  Eigen::Vector3d reference_ray_, current_ray_;
+  Eigen::Vector2d centre_xy_;
+  double reference_height_, inverse_sigma_;
+};
+
+/// A Gaussian prior on the first `N` parameters of a block.
+template <int N>
+struct Prior {
+  Prior(const Eigen::Matrix<double, N, 1>& mean, const Eigen::Matrix<double, N, 1>& sigma) : mean_(mean), sigma_(sigma) {}
+  template <typename T>
+  bool operator()(const T* value, T* residual) const {
+    for (int i = 0; i < N; ++i) residual[i] = (value[i] - mean_(i)) / sigma_(i);
+    return true;
+  }
+  Eigen::Matrix<double, N, 1> mean_, sigma_;
+};
+
+Eigen::Matrix3d roll_pitch(double roll, double pitch) {
+  return (Eigen::AngleAxisd(roll, Eigen::Vector3d::UnitX()) * Eigen::AngleAxisd(pitch, Eigen::Vector3d::UnitY())).toRotationMatrix();
+}
+
+}  // namespace
+
+Eigen::Isometry3d mountFor(const Eigen::Isometry3d& calibrated, const MountState& state) {
+  Eigen::Isometry3d T = calibrated;
+  T.linear() = roll_pitch(state.roll_rad, state.pitch_rad) * calibrated.linear();
+  T.translation().z() = state.height_m;
+  return T;
+}
+
+MountState calibratedState(const Eigen::Isometry3d& calibrated) { return {0.0, 0.0, calibrated.translation().z()}; }
+
+MountEstimate estimateMount(const std::vector<Eigen::Vector2d>& reference_rays, const std::vector<Eigen::Vector2d>& current_rays,
+                            const Eigen::Isometry3d& calibrated, const MountState& reference, const Pose2& T_guess,
+                            const MountEstimationSettings& settings) {
+  MountEstimate estimate;
+  const size_t n = std::min(reference_rays.size(), current_rays.size());
+  if (n < static_cast<size_t>(std::max(3, settings.min_pairs))) return estimate;
+  const Eigen::Matrix3d R0 = calibrated.linear();
+  const Eigen::Vector2d centre_xy = calibrated.translation().head<2>();
+  double reference_tilt[2] = {reference.roll_rad, reference.pitch_rad};
+  const MountState nominal = calibratedState(calibrated);
+  double current[3] = {reference.roll_rad, reference.pitch_rad, reference.height_m};
+  double motion[3] = {T_guess.x, T_guess.y, T_guess.theta};
+
+  ceres::Problem problem;
+  ceres::LossFunction* loss = new ceres::HuberLoss(3.0);  // shared by the pair residuals, owned by the problem
+  const size_t step = std::max<size_t>(1, n / static_cast<size_t>(std::max(1, settings.max_pairs)));
+  for (size_t i = 0; i < n; i += step) {
+    const Eigen::Vector3d ref = R0 * Eigen::Vector3d(reference_rays[i].x(), reference_rays[i].y(), 1.0);
+    const Eigen::Vector3d cur = R0 * Eigen::Vector3d(current_rays[i].x(), current_rays[i].y(), 1.0);
+    problem.AddResidualBlock(new ceres::AutoDiffCostFunction<PairResidual, 2, 2, 3, 3>(
+                                 new PairResidual(ref, cur, centre_xy, reference.height_m, settings.point_sigma_m)),
+                             loss, reference_tilt, current, motion);
+    ++estimate.pairs;
+  }
+  problem.AddResidualBlock(new ceres::AutoDiffCostFunction<Prior<2>, 2, 2>(new Prior<2>(
+                               Eigen::Vector2d(reference.roll_rad, reference.pitch_rad),
+                               Eigen::Vector2d::Constant(settings.reference_sigma_rad))),
+                           nullptr, reference_tilt);
+  problem.AddResidualBlock(new ceres::AutoDiffCostFunction<Prior<3>, 3, 3>(new Prior<3>(
+                               Eigen::Vector3d(nominal.roll_rad, nominal.pitch_rad, nominal.height_m),
+                               Eigen::Vector3d(settings.tilt_prior_rad, settings.tilt_prior_rad, settings.height_prior_m))),
+                           nullptr, current);
+  ceres::Solver::Options options;
+  options.linear_solver_type = ceres::DENSE_QR;
+  options.max_num_iterations = 20;
+  options.num_threads = 1;
+  ceres::Solver::Summary summary;
+  ceres::Solve(options, &problem, &summary);
+  if (!summary.IsSolutionUsable() || !std::isfinite(current[0] + current[1] + current[2]) || current[2] <= 0.0) return estimate;
+  estimate.ok = true;
+  estimate.current = {current[0], current[1], current[2]};
+  estimate.reference = {reference_tilt[0], reference_tilt[1], reference.height_m};
+  estimate.T_reference_current = Pose2(motion[0], motion[1], motion[2]);
+  return estimate;
+}
+
+}  // namespace groundslam

@@ -1,0 +1,55 @@
+#pragma once
+// Not in the paper: the camera's roll, pitch and height above the ground, estimated per frame. A rocking
+// mount shifts every ground point by height x tilt (2 mm for 0.5 degrees at 25 cm), which an SE(2) fit
+// cannot tell from motion. Two views of the same ground plane fix both cameras' attitude through the
+// perspective of the plane (the plane-induced homography has 8 degrees of freedom: motion 3, attitude 2 + 2,
+// height ratio 1); the baseline between the views decides how well.
+
+#include <vector>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include "groundslam/core/Pose2.hpp"
+
+namespace groundslam {
+
+/// The camera's attitude and height in one frame: the calibrated mount turned by roll (about the robot's
+/// x axis) and pitch (about its y axis), its optical centre at `height_m` above the ground.
+struct MountState {
+  double roll_rad = 0.0;
+  double pitch_rad = 0.0;
+  double height_m = 0.0;
+};
+
+/// The calibrated mount (T_robot_camera) in a given state.
+Eigen::Isometry3d mountFor(const Eigen::Isometry3d& calibrated, const MountState& state);
+
+/// The calibrated mount's own state: no tilt, its height.
+MountState calibratedState(const Eigen::Isometry3d& calibrated);
+
+struct MountEstimationSettings {
+  double tilt_prior_rad = 0.035;       ///< standard deviation of the tilt around the calibrated mount (2 degrees)
+  double height_prior_m = 0.003;       ///< standard deviation of the height around the calibrated height
+  double reference_sigma_rad = 0.003;  ///< how well the reference frame's attitude is already known
+  double point_sigma_m = 0.0002;       ///< noise of a ground point, metres (about a third of a pixel at 320x240)
+  int max_pairs = 300;                 ///< matched pairs used (evenly subsampled)
+  int min_pairs = 30;                  ///< fewer pairs: no estimate
+};
+
+struct MountEstimate {
+  bool ok = false;
+  MountState current;             ///< the current frame's state
+  MountState reference;           ///< the reference frame's state, refined
+  Pose2 T_reference_current;      ///< the robot's motion between the two frames
+  int pairs = 0;
+};
+
+/// Estimates the current frame's mount state from matched normalised camera rays of a reference frame
+/// and the current one (ray i of each sees the same ground point). The reference's height is held (it
+/// fixes the scale); its attitude is refined within reference_sigma_rad. `T_guess` starts the solver.
+MountEstimate estimateMount(const std::vector<Eigen::Vector2d>& reference_rays, const std::vector<Eigen::Vector2d>& current_rays,
+                            const Eigen::Isometry3d& calibrated, const MountState& reference, const Pose2& T_guess,
+                            const MountEstimationSettings& settings);
+
+}  // namespace groundslam
