@@ -1,5 +1,6 @@
 #include "RunOutputs.hpp"
 
+#include <cmath>
 #include <cstdio>
 
 #include "groundslam/io/InputError.hpp"
@@ -10,14 +11,18 @@ namespace groundslam::apps {
 std::string formatFramesCsv(const std::vector<FrameResult>& results, const std::vector<double>& load_ms) {
   std::string csv =
       "index,timestamp,keypoints,matches,inliers,status,load_ms,extract_ms,project_ms,match_ms,fit_ms,loop_ms,"
-      "optimise_ms,total_ms\n";
-  char row[512];
+      "optimise_ms,total_ms,odometry_x_m,odometry_y_m,odometry_theta_deg,still_matches,artifact_cells,roll_deg,pitch_deg,"
+      "height_m,mount_estimated\n";
+  char row[768];
   for (size_t i = 0; i < results.size(); ++i) {
     const FrameResult& r = results[i];
     const StageTimes& t = r.times;
-    std::snprintf(row, sizeof(row), "%d,%.9g,%d,%d,%d,%s,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f\n", r.index, r.timestamp,
-                  r.keypoints, r.matches, r.inliers, r.status.c_str(), load_ms[i], t.extract_ms, t.project_ms, t.match_ms,
-                  t.fit_ms, t.loop_ms, t.optimise_ms, load_ms[i] + t.total_ms);
+    std::snprintf(row, sizeof(row),
+                  "%d,%.9g,%d,%d,%d,%s,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.7f,%.7f,%.5f,%d,%d,%.4f,%.4f,%.6f,%d\n", r.index,
+                  r.timestamp, r.keypoints, r.matches, r.inliers, r.status.c_str(), load_ms[i], t.extract_ms, t.project_ms,
+                  t.match_ms, t.fit_ms, t.loop_ms, t.optimise_ms, load_ms[i] + t.total_ms, r.odometry.x, r.odometry.y,
+                  r.odometry.theta * 180.0 / M_PI, r.still_matches, r.artifact_cells, r.mount.roll_rad * 180.0 / M_PI,
+                  r.mount.pitch_rad * 180.0 / M_PI, r.mount.height_m, r.mount_estimated ? 1 : 0);
     csv += row;
   }
   return csv;

@@ -47,7 +47,8 @@ TEST(EndToEnd, OdometryOnAPerturbedSequenceStaysAccurate) {
   const std::string frames = readTextFile((run / "frames.csv").string());
   EXPECT_EQ(frames.substr(0, frames.find('\n')),
             "index,timestamp,keypoints,matches,inliers,status,load_ms,extract_ms,project_ms,match_ms,fit_ms,loop_ms,"
-            "optimise_ms,total_ms");
+            "optimise_ms,total_ms,odometry_x_m,odometry_y_m,odometry_theta_deg,still_matches,artifact_cells,roll_deg,pitch_deg,"
+            "height_m,mount_estimated");
   EXPECT_EQ(frames.find("fallback"), std::string::npos) << "odometry must keep every frame";
   const Config config = loadConfig({(run / "config.yaml").string()});  // the effective config reads back
   EXPECT_EQ(config.camera.image_width, 320);

@@ -44,13 +44,14 @@ GroundFeatures projectToGround(const ImageFeatures& features, const CameraModel&
     pixels.emplace_back(kp.pt.x, kp.pt.y);
     pixels.emplace_back(kp.pt.x + kArmPx * std::cos(angle), kp.pt.y + kArmPx * std::sin(angle));
   }
-  const auto points = camera.pixelsToGround(pixels);
+  const std::vector<Eigen::Vector2d> rays = camera.normalisedRays(pixels);
   GroundFeatures ground;
   ground.points.reserve(features.keypoints.size());
   for (size_t i = 0; i < features.keypoints.size(); ++i) {
-    const auto& p = points[2 * i];
-    const auto& arm = points[2 * i + 1];
+    const auto p = CameraModel::intersectGround(rays[2 * i], camera.T_robot_camera());
+    const auto arm = CameraModel::intersectGround(rays[2 * i + 1], camera.T_robot_camera());
     if (!p || !arm) continue;
+    ground.rays.push_back(rays[2 * i]);
     const Eigen::Vector2d direction = *arm - *p;
     ground.points.push_back(*p);
     ground.descriptors.push_back(features.descriptors.row(static_cast<int>(i)));
@@ -58,6 +59,12 @@ GroundFeatures projectToGround(const ImageFeatures& features, const CameraModel&
     ground.octaves.push_back(static_cast<std::uint8_t>(std::clamp(features.keypoints[i].octave, 0, 255)));
   }
   return ground;
+}
+
+void reprojectToGround(GroundFeatures& features, const Eigen::Isometry3d& T_robot_camera) {
+  for (size_t i = 0; i < features.rays.size() && i < features.points.size(); ++i) {
+    if (const auto p = CameraModel::intersectGround(features.rays[i], T_robot_camera)) features.points[i] = *p;
+  }
 }
 
 GroundFeatures dropNearTwins(const GroundFeatures& features, int max_distance) {
@@ -80,6 +87,7 @@ GroundFeatures dropNearTwins(const GroundFeatures& features, int max_distance) {
       kept.angles_rad.push_back(features.angles_rad[static_cast<size_t>(i)]);
       kept.octaves.push_back(features.octaves[static_cast<size_t>(i)]);
     }
+    if (features.hasRays()) kept.rays.push_back(features.rays[static_cast<size_t>(i)]);
   }
   return kept;
 }

@@ -39,7 +39,11 @@ struct GroundFeatures {
   cv::Mat descriptors;
   std::vector<float> angles_rad;       ///< ORB orientation as a direction on the ground, robot frame
   std::vector<std::uint8_t> octaves;   ///< ORB pyramid level
+  /// Undistorted normalised camera rays (x/z, y/z) of the keypoints: where they are in the image, whatever the
+  /// mount. Kept for the frames being tracked (re-projection with an estimated mount, still features); empty in maps.
+  std::vector<Eigen::Vector2d> rays;
   bool hasOrientations() const { return angles_rad.size() == points.size() && octaves.size() == points.size(); }
+  bool hasRays() const { return rays.size() == points.size(); }
   size_t size() const { return points.size(); }
 };
 
@@ -55,6 +59,10 @@ class OrbExtractor {
 
 /// Keeps the keypoints whose ray meets the ground, as metric points (pixel keypoints are not kept).
 GroundFeatures projectToGround(const ImageFeatures& features, const CameraModel& camera);
+
+/// Recomputes the ground points from the rays for another mount (a frame's estimated tilt and height). Points
+/// whose ray no longer meets the ground keep their old position. Needs rays.
+void reprojectToGround(GroundFeatures& features, const Eigen::Isometry3d& T_robot_camera);
 
 /// Removes every feature whose descriptor lies within `max_distance` of another one in the same set:
 /// on repetitive floors such twins can only produce ambiguous matches.

@@ -1,6 +1,7 @@
 #include "groundslam/core/MountEstimation.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 
 #include <ceres/ceres.h>
@@ -32,9 +33,9 @@ struct PairResidual {
       : reference_ray_(reference_ray), current_ray_(current_ray), centre_xy_(centre_xy), reference_height_(reference_height),
         inverse_sigma_(1.0 / sigma) {}
   template <typename T>
-  bool operator()(const T* reference_tilt, const T* current, const T* motion, T* residual) const {
+  bool operator()(const T* reference_state, const T* current, const T* motion, T* residual) const {
     T p_ref[2], p_cur[2];
-    groundPoint(reference_ray_, centre_xy_, reference_tilt[0], reference_tilt[1], T(reference_height_), p_ref);
+    groundPoint(reference_ray_, centre_xy_, reference_state[0], reference_state[1], reference_state[2], p_ref);
     groundPoint(current_ray_, centre_xy_, current[0], current[1], current[2], p_cur);
     const T c = ceres::cos(motion[2]), s = ceres::sin(motion[2]);
     residual[0] = (c * p_cur[0] - s * p_cur[1] + motion[0] - p_ref[0]) * inverse_sigma_;
@@ -76,31 +77,47 @@ MountState calibratedState(const Eigen::Isometry3d& calibrated) { return {0.0, 0
 MountEstimate estimateMount(const std::vector<Eigen::Vector2d>& reference_rays, const std::vector<Eigen::Vector2d>& current_rays,
                             const Eigen::Isometry3d& calibrated, const MountState& reference, const Pose2& T_guess,
                             const MountEstimationSettings& settings) {
+  return estimateMount({MountObservation{reference_rays, current_rays, reference, T_guess}}, calibrated, settings);
+}
+
+MountEstimate estimateMount(const std::vector<MountObservation>& observations, const Eigen::Isometry3d& calibrated,
+                            const MountEstimationSettings& settings) {
   MountEstimate estimate;
-  const size_t n = std::min(reference_rays.size(), current_rays.size());
-  if (n < static_cast<size_t>(std::max(3, settings.min_pairs))) return estimate;
+  size_t total = 0;
+  for (const MountObservation& o : observations) total += std::min(o.reference_rays.size(), o.current_rays.size());
+  if (observations.empty() || total < static_cast<size_t>(std::max(3, settings.min_pairs))) return estimate;
   const Eigen::Matrix3d R0 = calibrated.linear();
   const Eigen::Vector2d centre_xy = calibrated.translation().head<2>();
-  double reference_tilt[2] = {reference.roll_rad, reference.pitch_rad};
   const MountState nominal = calibratedState(calibrated);
-  double current[3] = {reference.roll_rad, reference.pitch_rad, reference.height_m};
-  double motion[3] = {T_guess.x, T_guess.y, T_guess.theta};
+  const MountState& first = observations.front().reference;
+  double current[3] = {first.roll_rad, first.pitch_rad, first.height_m};
+  std::vector<std::array<double, 3>> reference_states(observations.size());
+  std::vector<std::array<double, 3>> motions(observations.size());
 
   ceres::Problem problem;
   ceres::LossFunction* loss = new ceres::HuberLoss(3.0);  // shared by the pair residuals, owned by the problem
-  const size_t step = std::max<size_t>(1, n / static_cast<size_t>(std::max(1, settings.max_pairs)));
-  for (size_t i = 0; i < n; i += step) {
-    const Eigen::Vector3d ref = R0 * Eigen::Vector3d(reference_rays[i].x(), reference_rays[i].y(), 1.0);
-    const Eigen::Vector3d cur = R0 * Eigen::Vector3d(current_rays[i].x(), current_rays[i].y(), 1.0);
-    problem.AddResidualBlock(new ceres::AutoDiffCostFunction<PairResidual, 2, 2, 3, 3>(
-                                 new PairResidual(ref, cur, centre_xy, reference.height_m, settings.point_sigma_m)),
-                             loss, reference_tilt, current, motion);
-    ++estimate.pairs;
+  for (size_t k = 0; k < observations.size(); ++k) {
+    const MountObservation& o = observations[k];
+    reference_states[k] = {o.reference.roll_rad, o.reference.pitch_rad, o.reference.height_m};
+    motions[k] = {o.T_guess.x, o.T_guess.y, o.T_guess.theta};
+    const size_t n = std::min(o.reference_rays.size(), o.current_rays.size());
+    const size_t step = std::max<size_t>(1, n / static_cast<size_t>(std::max(1, settings.max_pairs)));
+    for (size_t i = 0; i < n; i += step) {
+      const Eigen::Vector3d ref = R0 * Eigen::Vector3d(o.reference_rays[i].x(), o.reference_rays[i].y(), 1.0);
+      const Eigen::Vector3d cur = R0 * Eigen::Vector3d(o.current_rays[i].x(), o.current_rays[i].y(), 1.0);
+      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<PairResidual, 2, 3, 3, 3>(
+                                   new PairResidual(ref, cur, centre_xy, o.reference.height_m, settings.point_sigma_m)),
+                               loss, reference_states[k].data(), current, motions[k].data());
+      ++estimate.pairs;
+    }
+    if (n == 0) continue;
+    problem.AddResidualBlock(new ceres::AutoDiffCostFunction<Prior<2>, 2, 3>(new Prior<2>(
+                                 Eigen::Vector2d(o.reference.roll_rad, o.reference.pitch_rad),
+                                 Eigen::Vector2d::Constant(settings.reference_sigma_rad))),
+                             nullptr, reference_states[k].data());
+    // The reference's height is held: it fixes the scale.
+    problem.SetManifold(reference_states[k].data(), new ceres::SubsetManifold(3, {2}));
   }
-  problem.AddResidualBlock(new ceres::AutoDiffCostFunction<Prior<2>, 2, 2>(new Prior<2>(
-                               Eigen::Vector2d(reference.roll_rad, reference.pitch_rad),
-                               Eigen::Vector2d::Constant(settings.reference_sigma_rad))),
-                           nullptr, reference_tilt);
   problem.AddResidualBlock(new ceres::AutoDiffCostFunction<Prior<3>, 3, 3>(new Prior<3>(
                                Eigen::Vector3d(nominal.roll_rad, nominal.pitch_rad, nominal.height_m),
                                Eigen::Vector3d(settings.tilt_prior_rad, settings.tilt_prior_rad, settings.height_prior_m))),
@@ -112,10 +129,22 @@ MountEstimate estimateMount(const std::vector<Eigen::Vector2d>& reference_rays, 
   ceres::Solver::Summary summary;
   ceres::Solve(options, &problem, &summary);
   if (!summary.IsSolutionUsable() || !std::isfinite(current[0] + current[1] + current[2]) || current[2] <= 0.0) return estimate;
+  ceres::Covariance::Options covariance_options;
+  covariance_options.algorithm_type = ceres::DENSE_SVD;
+  ceres::Covariance covariance(covariance_options);
+  const std::vector<std::pair<const double*, const double*>> blocks = {{current, current}};
+  if (!covariance.Compute(blocks, &problem)) return estimate;
+  Eigen::Matrix<double, 3, 3, Eigen::RowMajor> state_covariance;
+  covariance.GetCovarianceBlock(current, current, state_covariance.data());
+  // Ceres assumes the residuals have unit variance; scale by their observed variance.
+  const double dof = std::max(1.0, 2.0 * estimate.pairs - static_cast<double>(problem.NumParameters()));
+  const double residual_variance = std::max(1.0, 2.0 * summary.final_cost / dof);
+  estimate.tilt_covariance = state_covariance.topLeftCorner<2, 2>() * residual_variance;
+  estimate.height_variance = state_covariance(2, 2) * residual_variance;
   estimate.ok = true;
   estimate.current = {current[0], current[1], current[2]};
-  estimate.reference = {reference_tilt[0], reference_tilt[1], reference.height_m};
-  estimate.T_reference_current = Pose2(motion[0], motion[1], motion[2]);
+  estimate.reference = {reference_states[0][0], reference_states[0][1], reference_states[0][2]};
+  estimate.T_reference_current = Pose2(motions[0][0], motions[0][1], motions[0][2]);
   return estimate;
 }
 

@@ -42,12 +42,24 @@ struct MountEstimate {
   MountState current;             ///< the current frame's state
   MountState reference;           ///< the reference frame's state, refined
   Pose2 T_reference_current;      ///< the robot's motion between the two frames
+  Eigen::Matrix2d tilt_covariance = Eigen::Matrix2d::Identity();  ///< of the current (roll, pitch), rad^2
+  double height_variance = 1.0;   ///< of the current height, m^2
   int pairs = 0;
 };
 
-/// Estimates the current frame's mount state from matched normalised camera rays of a reference frame
-/// and the current one (ray i of each sees the same ground point). The reference's height is held (it
-/// fixes the scale); its attitude is refined within reference_sigma_rad. `T_guess` starts the solver.
+/// Matched normalised camera rays of a reference frame and the current one (ray i of each sees the same
+/// ground point), the reference's believed state and a guess of the motion between them.
+struct MountObservation {
+  std::vector<Eigen::Vector2d> reference_rays, current_rays;
+  MountState reference;
+  Pose2 T_guess;
+};
+
+/// Estimates the current frame's mount state from its matches to one or more reference frames. The
+/// references' heights are held (they fix the scale); their attitudes are refined within reference_sigma_rad. The result's `reference` and `T_reference_current` are the first observation's.
+MountEstimate estimateMount(const std::vector<MountObservation>& observations, const Eigen::Isometry3d& calibrated,
+                            const MountEstimationSettings& settings);
+/// One reference frame.
 MountEstimate estimateMount(const std::vector<Eigen::Vector2d>& reference_rays, const std::vector<Eigen::Vector2d>& current_rays,
                             const Eigen::Isometry3d& calibrated, const MountState& reference, const Pose2& T_guess,
                             const MountEstimationSettings& settings);

@@ -14,6 +14,7 @@
 #include "groundslam/core/Matching.hpp"
 #include "groundslam/core/PoseGraph.hpp"
 #include "groundslam/core/RigidFit.hpp"
+#include "groundslam/core/StillFeatures.hpp"
 #include "groundslam/localization/GlobalLocalizer.hpp"
 #include "groundslam/pipeline/LoopClosure.hpp"
 
@@ -58,6 +59,29 @@ struct OdometryChecks {
   double max_ambiguity = 0.5;  ///< a rival transform with this share of the fit's inliers makes the motion unknown
 };
 
+/// Outdoors and on real robots: features that stay still in the image, and the camera's tilt and height per
+/// frame (see core/StillFeatures.hpp and core/MountEstimation.hpp).
+struct OutdoorConfig {
+  bool reject_still = true;        ///< odometry ignores matches at the same place in both images while the rest say the robot moved
+  double still_radius_px = 1.5;    ///< a match whose keypoints are this close in the image is still
+  double moved_factor = 3.0;       ///< the robot moved when the fit moves the still matches by this many radii
+  ArtifactMaskSettings mask;       ///< image cells where still matches keep appearing
+  bool estimate_mount = true;      ///< estimate roll, pitch and height per frame and project with them
+  double tilt_prior_deg = 1.0;     ///< standard deviation of the tilt around the calibrated mount
+  double height_prior_m = 0.003;   ///< standard deviation of the height around the calibrated height
+  /// Images give the height only relative to the reference frame's, so errors would add up frame after
+  /// frame; each frame gives back this fraction of its difference from the calibrated height (a mount
+  /// bounces around its calibrated height).
+  double height_return = 0.1;
+  double reference_sigma_deg = 0.2;  ///< how far a reference frame's estimated tilt may still move
+  double point_sigma_px = 0.35;    ///< keypoint noise, pixels
+  /// The tilt shows in the perspective between two views, more clearly the farther apart they are: the
+  /// reference is the oldest recent frame within this fraction of the footprint's short side.
+  double baseline_fraction = 0.4;
+  double reference_match_radius_m = 0.006;  ///< guided matching to the reference around the odometry's prediction
+  int max_pairs = 300;             ///< matches used per estimate
+};
+
 struct Config {
   CameraConfig camera;
   DatasetConfig dataset;
@@ -68,6 +92,7 @@ struct Config {
   FallbackSettings fallback;
   LoopClosureSettings loop_closure;
   LocalizationSettings localization;
+  OutdoorConfig outdoor;
   GraphConfig graph;
 };
 
@@ -179,6 +204,22 @@ void visitConfigFields(Config_& c, Visitor&& v) {
   v("localization", "max_odometry_disagreement_m", c.localization.max_odometry_disagreement_m, kPositive);
   v("localization", "max_odometry_disagreement_rad", c.localization.max_odometry_disagreement_rad, kPositive);
   v("localization", "every_frames", c.localization.every_frames, Range{1, 1e9});
+  v("outdoor", "reject_still", c.outdoor.reject_still, Range{});
+  v("outdoor", "still_radius_px", c.outdoor.still_radius_px, Range{0.0, 50.0});
+  v("outdoor", "moved_factor", c.outdoor.moved_factor, Range{1.0, 100.0});
+  v("outdoor", "mask_cells_x", c.outdoor.mask.cells_x, Range{1, 1000});
+  v("outdoor", "mask_cells_y", c.outdoor.mask.cells_y, Range{1, 1000});
+  v("outdoor", "mask_fade", c.outdoor.mask.fade, Range{0.0, 1.0});
+  v("outdoor", "mask_min_evidence", c.outdoor.mask.min_evidence, kPositive);
+  v("outdoor", "estimate_mount", c.outdoor.estimate_mount, Range{});
+  v("outdoor", "tilt_prior_deg", c.outdoor.tilt_prior_deg, Range{0.0, 45.0, true});
+  v("outdoor", "height_prior_m", c.outdoor.height_prior_m, kPositive);
+  v("outdoor", "height_return", c.outdoor.height_return, Range{0.0, 1.0});
+  v("outdoor", "reference_sigma_deg", c.outdoor.reference_sigma_deg, Range{0.0, 45.0, true});
+  v("outdoor", "point_sigma_px", c.outdoor.point_sigma_px, kPositive);
+  v("outdoor", "max_pairs", c.outdoor.max_pairs, Range{3, 100000});
+  v("outdoor", "baseline_fraction", c.outdoor.baseline_fraction, Range{0.0, 1.0});
+  v("outdoor", "reference_match_radius_m", c.outdoor.reference_match_radius_m, kPositive);
   v("graph", "min_sigma_m", c.graph.min_sigma_m, kNonNegative);
   v("graph", "min_sigma_rad", c.graph.min_sigma_rad, kNonNegative);
   v("graph", "optimise_every_frames", c.graph.optimise_every_frames, Range{1, 1e9});

@@ -3,6 +3,7 @@
 
 #include <string>
 
+#include "groundslam/core/MountEstimation.hpp"
 #include "groundslam/core/Pose2.hpp"
 
 namespace groundslam {
@@ -27,6 +28,11 @@ struct FrameResult {
   std::string status;         ///< first | ok | fallback_<reason>
   Pose2 T_world_robot;        ///< the estimate when the frame was processed
   int loop_closures = 0;      ///< accepted loop closures of this frame
+  Pose2 odometry;             ///< the odometry edge's motion from the previous frame (meaningful when status is ok)
+  int still_matches = 0;      ///< matches that stayed still in the image while the robot moved (not ground)
+  int artifact_cells = 0;     ///< image cells the artifact mask excludes
+  MountState mount;           ///< the camera's roll, pitch and height used for this frame's ground points
+  bool mount_estimated = false;  ///< mount was estimated from the images (else the calibrated mount)
   StageTimes times;
 };
 

@@ -34,8 +34,13 @@ Slam::Slam(const Config& config, std::shared_ptr<const Vocabulary> vocabulary)
       odometry_fitting_(config.odometry),
       preparer_(config),
       matcher_(config.matching),
+      calibrated_mount_(cameraModelFrom(config.camera).T_robot_camera()),
+      ground_sample_m_(cameraModelFrom(config.camera).groundSampleDistance()),
+      artifact_mask_(intrinsicsOf(config.camera), config.outdoor.mask),
       graph_(config.graph.solver) {
   odometry_fitting_.measure_ambiguity = true;
+  const CameraIntrinsics k = intrinsicsOf(config.camera);
+  mount_baseline_m_ = config.outdoor.baseline_fraction * std::min(k.width, k.height) * ground_sample_m_;
   odometry_fitting_.rival_max_rotation_rad = 1.0 * M_PI / 180.0;
   if (config.loop_closure.enabled && vocabulary && !vocabulary->empty()) {
     loop_closer_.emplace(config.loop_closure, std::move(vocabulary), config.matching, config.odometry, config.localization);
@@ -54,11 +59,13 @@ FrameResult Slam::process(PreparedFrame prepared) {
   result.times.extract_ms = prepared.extract_ms;
   result.times.project_ms = prepared.project_ms;
   timestamps_.push_back(prepared.timestamp);
-  Keyframe current{frame, prepared.timestamp, std::move(prepared.features)};
+  Keyframe current{frame, prepared.timestamp, std::move(prepared.features), calibratedState(calibrated_mount_)};
 
   // §III-B: match to the previous image, fit T_prev_curr with a robust M-estimator (eqs. 5-6), add the edge.
   if (previous_) {
-    const OdometryEdge odometry = estimateOdometry(*previous_, current, result);
+    OdometryEdge odometry = estimateOdometry(*previous_, current, result);
+    if (!odometry.fallback && config_.outdoor.estimate_mount) estimateMountOf(*previous_, current, odometry, result);
+    result.odometry = odometry.T_prev_curr;
     if (!odometry.fallback) last_good_odometry_ = odometry;
     if (odometry.fallback && loop_closer_) {
       startSegment(odometry);  // tracking lost: the motion is unknown, global localization will find the pose
@@ -79,13 +86,24 @@ FrameResult Slam::process(PreparedFrame prepared) {
     measured_.push_back(true);
   }
 
-  // §III-C: loop closures through the three gates become graph edges; the graph is optimised (LM).
-  closeLoops(current, result);
-  if (lost_) relocalize(current, result);
-  else if (prior_frames_ > 0) closeLoopsOnPriorMap(current, result);
+  result.mount = current.mount;
+  result.artifact_cells = artifact_mask_.artifactCells();
+
+  // §III-C: loop closures through the three gates become graph edges; the graph is optimised (LM). What
+  // stays still in the image is not ground: the places and the map get only the features outside artifact cells.
+  Keyframe ground{current.index, current.timestamp, artifact_mask_.withoutArtifacts(current.features), current.mount};
+  ground.features.rays.clear();
+  closeLoops(ground, result);
+  if (lost_) relocalize(ground, result);
+  else if (prior_frames_ > 0) closeLoopsOnPriorMap(ground, result);
   optimiseIfDue(result, false);
 
   result.T_world_robot = graph_.poses().back();
+  if (lost_ || result.status != "ok") recent_.clear();
+  if (!lost_ && config_.outdoor.estimate_mount) {
+    recent_.push_back(current);
+    while (recent_.size() > 30) recent_.pop_front();
+  }
   previous_ = std::move(current);
   result.times.total_ms = prepared.extract_ms + prepared.project_ms + total.lap();
   return result;
@@ -209,7 +227,28 @@ void Slam::optimiseIfDue(FrameResult& result, bool at_end) {
   result.times.optimise_ms = timer.lap();
 }
 
-OdometryEdge Slam::estimateOdometry(const Keyframe& previous, const Keyframe& current, FrameResult& result) const {
+RigidEstimate Slam::fitMatches(const std::vector<Match>& matches, const Keyframe& previous, const Keyframe& current,
+                              const FitSettings& settings) const {
+  const auto [previous_points, current_points] = matchedPoints(matches, current.features, previous.features);
+  return fitRigidTransform(previous_points, current_points, settings);
+}
+
+std::optional<RigidEstimate> Slam::fitWithoutStill(const StillSplit& split, const Keyframe& previous, const Keyframe& current) const {
+  if (split.still.empty() || split.moving.size() < static_cast<size_t>(config_.odometry.min_inliers)) return std::nullopt;
+  RigidEstimate fit = fitMatches(split.moving, previous, current, odometry_fitting_);
+  if (!fit.ok()) return std::nullopt;
+  // Did the robot move? Then the still matches moved with the camera, not with the ground.
+  double moved = 0.0;
+  for (const Match& m : split.still) {
+    const Eigen::Vector2d& p = current.features.points[static_cast<size_t>(m.query)];
+    moved += (fit.T_target_source * p - p).norm();
+  }
+  moved /= static_cast<double>(split.still.size());
+  if (moved < config_.outdoor.moved_factor * config_.outdoor.still_radius_px * ground_sample_m_) return std::nullopt;
+  return fit;
+}
+
+OdometryEdge Slam::estimateOdometry(const Keyframe& previous, const Keyframe& current, FrameResult& result) {
   StageTimer timer;
   RigidEstimate fit;
   std::vector<Match> matches;
@@ -218,26 +257,144 @@ OdometryEdge Slam::estimateOdometry(const Keyframe& previous, const Keyframe& cu
     // Guided by constant velocity: compare only features the previous motion puts within `radius`.
     matches = matchNearby(current.features, previous.features, last_good_odometry_->T_prev_curr, radius, config_.matching.ratio);
     result.times.match_ms = timer.lap();
-    const auto [previous_points, current_points] = matchedPoints(matches, current.features, previous.features);
-    fit = fitRigidTransform(previous_points, current_points, odometry_fitting_);
+    fit = fitMatches(matches, previous, current, odometry_fitting_);
     result.times.fit_ms = timer.lap();
   }
   // Without a prediction, or when the robot changed its motion more than the radius allows: brute force.
   if (!fit.ok() || fit.inliers < config_.matching.guided_min_inlier_fraction * static_cast<double>(current.features.size())) {
     matches = matcher_.match(current.features.descriptors, previous.features.descriptors);
     result.times.match_ms += timer.lap();
-    const auto [previous_points, current_points] = matchedPoints(matches, current.features, previous.features);
-    fit = fitRigidTransform(previous_points, current_points, odometry_fitting_);
-    result.times.fit_ms += timer.lap();
   }
+  // Not in the paper: matches that stay still in the image while the others say the robot moved are the
+  // robot's shadow, lens dirt or glare; fitted without them. Otherwise every match counts, except still
+  // ones in cells known to hold artifacts (a moving robot whose ground matches are too few is not still).
+  StillSplit split;
+  if (config_.outdoor.reject_still) {
+    split = splitStillMatches(matches, current.features, previous.features, config_.outdoor.still_radius_px / config_.camera.fx);
+  } else {
+    split.moving = matches;
+  }
+  std::vector<Match> used;
+  if (const auto without_still = fitWithoutStill(split, previous, current)) {
+    fit = *without_still;
+    used = split.moving;
+    result.still_matches = static_cast<int>(split.still.size());
+    artifact_mask_.observe(current.features, split.still, split.moving);
+  } else {
+    used = artifact_mask_.withoutArtifacts(matches, current.features);
+    fit = fitMatches(used, previous, current, odometry_fitting_);
+    if (fit.ok() && split.still.empty()) artifact_mask_.observe(current.features, {}, used);
+    else artifact_mask_.fade();
+  }
+  result.times.fit_ms += timer.lap();
   result.matches = static_cast<int>(matches.size());
   result.inliers = fit.inliers;
   // Not in the paper: between images that do not overlap (a gap, a carried robot), a repetitive floor still
   // matches one repetition over; such a fit has rivals nearly as good and is not a motion.
   if (fit.ok() && fit.ambiguity() > config_.odometry_checks.max_ambiguity) fit.status = FitStatus::ambiguous;
 
-  OdometryEdge edge{fit.T_target_source, fit.covariance, result.matches, fit.inliers, fit.status, false};
+  OdometryEdge edge{fit.T_target_source, fit.covariance, result.matches, fit.inliers, fit.status, false, std::move(used)};
   return fit.ok() ? edge : fallbackOdometry(edge);
+}
+
+std::vector<Slam::MountReference> Slam::mountReferences(const Keyframe& current, const OdometryEdge& odometry) const {
+  std::vector<MountReference> references;
+  if (recent_.size() < 2) return references;
+  const Pose2 T_world_current = graph_.poses().back() * odometry.T_prev_curr;
+  FitSettings settings = odometry_fitting_;
+  settings.measure_ambiguity = false;
+  const double inlier2 = settings.ransac_inlier_m * settings.ransac_inlier_m;
+  const Keyframe* last_used = nullptr;
+  for (const double reach : {mount_baseline_m_, 0.5 * mount_baseline_m_}) {
+    for (const Keyframe& candidate : recent_) {
+      if (&candidate == &recent_.back() || &candidate == last_used) break;  // the previous frame comes from odometry
+      const Pose2 predicted = between(graph_.poses()[static_cast<size_t>(candidate.index)], T_world_current);
+      if (predicted.translation().norm() > reach) continue;
+      last_used = &candidate;
+      const std::vector<Match> matches =
+          matchNearby(current.features, candidate.features, predicted, config_.outdoor.reference_match_radius_m, config_.matching.ratio);
+      const RigidEstimate fit = fitMatches(matches, candidate, current, settings);
+      if (!fit.ok()) break;
+      MountReference reference{&candidate, {}, fit.T_target_source};
+      for (const Match& m : matches) {
+        const Eigen::Vector2d& q = current.features.points[static_cast<size_t>(m.query)];
+        if ((fit.T_target_source * q - candidate.features.points[static_cast<size_t>(m.train)]).squaredNorm() <= inlier2) {
+          reference.matches.push_back(m);
+        }
+      }
+      references.push_back(std::move(reference));
+      break;
+    }
+  }
+  return references;
+}
+
+double Slam::Spread::keep(double square, double variance, int count) {
+  const double rate = 1.0 / std::min(count, 50);  // a plain mean at first, then the last 50 or so frames
+  square_mean += rate * (square - square_mean);
+  variance_mean += rate * (variance - variance_mean);
+  return square_mean > 0.0 ? std::max(0.0, square_mean - variance_mean) / square_mean : 0.0;
+}
+
+void Slam::estimateMountOf(const Keyframe& previous, Keyframe& current, OdometryEdge& odometry, FrameResult& result) {
+  if (!previous.features.hasRays() || !current.features.hasRays()) return;
+  StageTimer timer;
+  // The previous frame and, when there are any, frames farther back: the tilt shows better over a baseline.
+  std::vector<MountReference> references = mountReferences(current, odometry);
+  MountReference from_previous{&previous, {}, odometry.T_prev_curr};
+  const double inlier2 = config_.odometry.ransac_inlier_m * config_.odometry.ransac_inlier_m;
+  for (const Match& m : odometry.used) {
+    const size_t q = static_cast<size_t>(m.query), t = static_cast<size_t>(m.train);
+    if ((odometry.T_prev_curr * current.features.points[q] - previous.features.points[t]).squaredNorm() <= inlier2) {
+      from_previous.matches.push_back(m);
+    }
+  }
+  references.push_back(std::move(from_previous));
+  std::vector<MountObservation> observations;
+  for (const MountReference& reference : references) {
+    if (!reference.keyframe->features.hasRays()) continue;
+    MountObservation o;
+    o.reference = reference.keyframe->mount;
+    o.T_guess = reference.T_reference_current;
+    for (const Match& m : reference.matches) {
+      o.reference_rays.push_back(reference.keyframe->features.rays[static_cast<size_t>(m.train)]);
+      o.current_rays.push_back(current.features.rays[static_cast<size_t>(m.query)]);
+    }
+    observations.push_back(std::move(o));
+  }
+  MountEstimationSettings settings;
+  settings.tilt_prior_rad = config_.outdoor.tilt_prior_deg * M_PI / 180.0;
+  settings.height_prior_m = config_.outdoor.height_prior_m;
+  settings.reference_sigma_rad = config_.outdoor.reference_sigma_deg * M_PI / 180.0;
+  settings.point_sigma_m = config_.outdoor.point_sigma_px * ground_sample_m_;
+  settings.max_pairs = config_.outdoor.max_pairs;
+  const MountEstimate estimate = estimateMount(observations, calibrated_mount_, settings);
+  if (!estimate.ok) return;
+  // Empirical Bayes: the estimate is shrunk toward the calibrated mount by the share of the estimates' spread
+  // that is noise (hardly shrunk on a rocking mount with a clear view, all the way on a rigid one).
+  const MountState& e = estimate.current;
+  const double calibrated_height = calibrated_mount_.translation().z();
+  ++mount_estimates_;
+  const double keep_tilt = tilt_spread_.keep(0.5 * (e.roll_rad * e.roll_rad + e.pitch_rad * e.pitch_rad),
+                                             0.5 * estimate.tilt_covariance.trace(), mount_estimates_);
+  const double keep_height = height_spread_.keep((e.height_m - calibrated_height) * (e.height_m - calibrated_height),
+                                                 estimate.height_variance, mount_estimates_);
+  Keyframe reprojected = current;
+  reprojected.mount = {keep_tilt * e.roll_rad, keep_tilt * e.pitch_rad,
+                       calibrated_height + (1.0 - config_.outdoor.height_return) * keep_height * (e.height_m - calibrated_height)};
+  reprojectToGround(reprojected.features, mountFor(calibrated_mount_, reprojected.mount));
+  // The same matches, now between points projected with each frame's own mount.
+  FitSettings refit = odometry_fitting_;
+  refit.measure_ambiguity = false;
+  const RigidEstimate fit = fitMatches(odometry.used, previous, reprojected, refit);
+  result.times.fit_ms += timer.lap();
+  if (!fit.ok()) return;
+  current = std::move(reprojected);
+  odometry.T_prev_curr = fit.T_target_source;
+  odometry.covariance = fit.covariance;
+  odometry.inliers = fit.inliers;
+  result.inliers = fit.inliers;
+  result.mount_estimated = true;
 }
 
 OdometryEdge Slam::fallbackOdometry(OdometryEdge failed) const {

@@ -2,6 +2,7 @@
 // The SLAM system of Hart et al. (ICRA 2023), one image at a time: image processing (§III-A), local
 // odometry (§III-B), loop closure (§III-C) and pose-graph optimisation.
 
+#include <deque>
 #include <memory>
 #include <optional>
 #include <vector>
@@ -13,8 +14,10 @@
 #include "groundslam/core/CameraModel.hpp"
 #include "groundslam/core/FeatureExtraction.hpp"
 #include "groundslam/core/Matching.hpp"
+#include "groundslam/core/MountEstimation.hpp"
 #include "groundslam/core/PoseGraph.hpp"
 #include "groundslam/core/RigidFit.hpp"
+#include "groundslam/core/StillFeatures.hpp"
 #include "groundslam/core/Trajectory.hpp"
 #include "groundslam/pipeline/Config.hpp"
 #include "groundslam/pipeline/FramePreparer.hpp"
@@ -27,7 +30,8 @@ namespace groundslam {
 struct Keyframe {
   int index = 0;
   double timestamp = 0.0;
-  GroundFeatures features;
+  GroundFeatures features;  ///< with rays; points projected with `mount`
+  MountState mount;
 };
 
 /// The relative motion between consecutive frames and how it was obtained.
@@ -38,6 +42,7 @@ struct OdometryEdge {
   int inliers = 0;
   FitStatus fit_status = FitStatus::ok;
   bool fallback = false;  ///< the fit failed and the previous motion was assumed
+  std::vector<Match> used;  ///< the matches the fit used (still ones left out)
 };
 
 class Slam {
@@ -75,7 +80,23 @@ class Slam {
   const std::vector<LoopCandidate>& loopCandidates() const { return candidates_; }
 
  private:
-  OdometryEdge estimateOdometry(const Keyframe& previous, const Keyframe& current, FrameResult& result) const;
+  OdometryEdge estimateOdometry(const Keyframe& previous, const Keyframe& current, FrameResult& result);
+  RigidEstimate fitMatches(const std::vector<Match>& matches, const Keyframe& previous, const Keyframe& current,
+                           const FitSettings& settings) const;
+  /// Matches split into still ones and the rest; when the rest fit a motion that moves the still ones, that fit.
+  std::optional<RigidEstimate> fitWithoutStill(const StillSplit& split, const Keyframe& previous, const Keyframe& current) const;
+  /// The current frame's roll, pitch and height from the odometry's inliers; its points re-projected and the
+  /// odometry fitted again with them. Leaves everything as it was when the estimate fails.
+  void estimateMountOf(const Keyframe& previous, Keyframe& current, OdometryEdge& odometry, FrameResult& result);
+  /// Recent frames of this segment farther back than the previous one: the oldest within the mount
+  /// estimation's baseline of the current pose and the oldest within half of it, with the matches
+  /// (current = query) and motion to each.
+  struct MountReference {
+    const Keyframe* keyframe = nullptr;
+    std::vector<Match> matches;
+    Pose2 T_reference_current;
+  };
+  std::vector<MountReference> mountReferences(const Keyframe& current, const OdometryEdge& odometry) const;
   OdometryEdge fallbackOdometry(OdometryEdge failed) const;
   void addToGraph(const OdometryEdge& odometry);
   /// Tracking is lost: a new segment starts, tied to the last one by an edge with almost no information.
@@ -93,6 +114,21 @@ class Slam {
   FitSettings odometry_fitting_;  ///< the odometry settings, rivals measured (see odometry_checks)
   FramePreparer preparer_;
   DescriptorMatcher matcher_;
+  Eigen::Isometry3d calibrated_mount_;
+  double ground_sample_m_ = 0.0;   ///< metres per pixel at the image centre
+  ArtifactMask artifact_mask_;
+  double mount_baseline_m_ = 0.0;
+  /// How much the mount really rocks and bounces, against how noisy one frame's estimate is: running means
+  /// of the estimates' squared departure from the calibrated mount and of their variance. A rigid mount's
+  /// estimates are all noise, and are then shrunk to the calibrated mount.
+  struct Spread {
+    double square_mean = 0.0, variance_mean = 0.0;
+    /// Adds one estimate; returns the share of the departure to keep.
+    double keep(double square, double variance, int count);
+  };
+  Spread tilt_spread_, height_spread_;
+  int mount_estimates_ = 0;
+  std::deque<Keyframe> recent_;  ///< tracked frames of the current segment, newest last (mount references)
   std::optional<LoopCloser> loop_closer_;
   PoseGraph graph_;
   std::optional<Keyframe> previous_;

@@ -1,0 +1,66 @@
+#!/usr/bin/python3
+"""Checks a run's per-frame odometry and mount estimates against a simulated sequence's ground truth.
+
+Usage: scripts/motion_check.py RUN_DIR SEQUENCE_DIR [--json]
+Prints: frames whose status is ok but whose odometry motion is off by more than 5 mm or 0.5 degrees
+(silent wrong motions), and the RMS error of the estimated roll, pitch and height (mount.csv).
+"""
+import csv
+import json
+import math
+import sys
+
+
+def read_tum(path):
+    poses = {}
+    for line in open(path):
+        if line.startswith('#') or not line.strip():
+            continue
+        t, x, y, _z, qx, qy, qz, qw = map(float, line.split()[:8])
+        poses[round(t)] = (x, y, 2.0 * math.atan2(qz, qw))
+    return poses
+
+
+def between(a, b):
+    c, s = math.cos(a[2]), math.sin(a[2])
+    dx, dy = b[0] - a[0], b[1] - a[1]
+    return (c * dx + s * dy, -s * dx + c * dy, math.atan2(math.sin(b[2] - a[2]), math.cos(b[2] - a[2])))
+
+
+def main():
+    run, seq = sys.argv[1], sys.argv[2]
+    truth = read_tum(seq + '/groundtruth.tum')
+    mounts = {int(r['index']): r for r in csv.DictReader(open(seq + '/mount.csv'))}
+    frames = list(csv.DictReader(open(run + '/frames.csv')))
+    wrong, ok, worst_m, worst_deg = 0, 0, 0.0, 0.0
+    tilt_err, height_err, tilt_level = [], [], []
+    for prev, row in zip(frames, frames[1:]):
+        i, j = int(prev['index']), int(row['index'])
+        if row['status'] == 'ok' and i in truth and j in truth:
+            ok += 1
+            gt = between(truth[i], truth[j])
+            dm = math.hypot(float(row['odometry_x_m']) - gt[0], float(row['odometry_y_m']) - gt[1])
+            dd = abs(math.degrees(math.atan2(math.sin(math.radians(float(row['odometry_theta_deg'])) - gt[2]),
+                                             math.cos(math.radians(float(row['odometry_theta_deg'])) - gt[2]))))
+            worst_m, worst_deg = max(worst_m, dm), max(worst_deg, dd)
+            if dm > 0.005 or dd > 0.5:
+                wrong += 1
+        if row.get('mount_estimated') == '1' and j in mounts:
+            m = mounts[j]
+            tilt_err += [float(row['roll_deg']) - float(m['roll_deg']), float(row['pitch_deg']) - float(m['pitch_deg'])]
+            tilt_level += [float(m['roll_deg']), float(m['pitch_deg'])]
+            height_err.append(float(row['height_m']) - float(m['height_m']))
+    rms = lambda v: math.sqrt(sum(x * x for x in v) / len(v)) if v else float('nan')
+    result = {'ok_frames': ok, 'silent_wrong_motions': wrong, 'worst_ok_error_mm': 1000 * worst_m,
+              'worst_ok_error_deg': worst_deg, 'mount_estimated_frames': len(height_err),
+              'tilt_rms_error_deg': rms(tilt_err), 'tilt_rms_true_deg': rms(tilt_level),
+              'height_rms_error_mm': 1000 * rms(height_err)}
+    if '--json' in sys.argv:
+        print(json.dumps(result))
+    else:
+        for k, v in result.items():
+            print(f'{k:24s} {v:.4g}' if isinstance(v, float) else f'{k:24s} {v}')
+
+
+if __name__ == '__main__':
+    main()
