@@ -94,7 +94,7 @@ std::string describe(const sim::SimulationSettings& s, const SimulateOptions& o)
       << "\ndefocus_sigma_px: " << s.photometry.defocus_sigma_px
       << "\nexposure_variation: " << s.photometry.exposure_variation << "\nvignetting: " << s.photometry.vignetting
       << "\nheight_jitter_m: " << s.height_jitter_m << "\nshadow: " << s.artifacts.shadow << "\nlens_dirt: " << s.artifacts.lens_dirt
-      << "\nglare: " << s.artifacts.glare << "\nspin_every: " << s.motion.spin_every << "\nspin_deg: " << s.motion.spin_deg
+      << "\nglare: " << s.artifacts.glare << "\nbumper: " << s.artifacts.bumper << "\nspin_every: " << s.motion.spin_every << "\nspin_deg: " << s.motion.spin_deg
       << "\ndrop_frames: " << o.drop_probability << "\ndrop_max: " << o.drop_max
       << "\nseed: " << s.seed << "\nground_seed: " << o.ground_seed << "\nground_size_m: " << s.ground_size_m << "\ngaps: [";
   for (size_t i = 0; i < o.gaps.size(); ++i) out << (i ? ", " : "") << "'" << o.gaps[i] << "'";
@@ -217,6 +217,8 @@ void addSimulateCommand(CLI::App& app) {
   cmd->add_option("--lens-dirt", o->settings.artifacts.lens_dirt, "Dark blotches fixed on the lens")->check(CLI::Range(0, 100))->capture_default_str();
   cmd->add_option("--glare", o->settings.artifacts.glare, "Peak of a bright patch fixed in the image (1 saturates)")
       ->check(CLI::Range(0.0, 5.0))->capture_default_str();
+  cmd->add_option("--bumper", o->settings.artifacts.bumper, "Share of the image height hidden by a part of the robot in view")
+      ->check(CLI::Range(0.0, 0.5))->capture_default_str();
   cmd->add_option("--spin-every", o->settings.motion.spin_every,
                   "Every N frames the robot turns sharply on the spot by --spin-deg, half a period later back (0: never)")
       ->check(CLI::Range(0, 1000000))->capture_default_str();

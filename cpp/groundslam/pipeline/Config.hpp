@@ -80,6 +80,10 @@ struct OutdoorConfig {
   double baseline_fraction = 0.4;
   double reference_match_radius_m = 0.006;  ///< guided matching to the reference around the odometry's prediction
   int max_pairs = 300;             ///< matches used per estimate
+  double pair_radius_px = 2.5;     ///< a match enters the estimate when the SE(2) fit leaves it this close
+  /// An estimate's own variance understates its error on hard images (blur, glare, few matches); this factor
+  /// on it decides how much of the estimates' spread counts as noise.
+  double variance_inflation = 2.0;
 };
 
 struct Config {
@@ -218,6 +222,8 @@ void visitConfigFields(Config_& c, Visitor&& v) {
   v("outdoor", "reference_sigma_deg", c.outdoor.reference_sigma_deg, Range{0.0, 45.0, true});
   v("outdoor", "point_sigma_px", c.outdoor.point_sigma_px, kPositive);
   v("outdoor", "max_pairs", c.outdoor.max_pairs, Range{3, 100000});
+  v("outdoor", "pair_radius_px", c.outdoor.pair_radius_px, kPositive);
+  v("outdoor", "variance_inflation", c.outdoor.variance_inflation, Range{1.0, 100.0});
   v("outdoor", "baseline_fraction", c.outdoor.baseline_fraction, Range{0.0, 1.0});
   v("outdoor", "reference_match_radius_m", c.outdoor.reference_match_radius_m, kPositive);
   v("graph", "min_sigma_m", c.graph.min_sigma_m, kNonNegative);

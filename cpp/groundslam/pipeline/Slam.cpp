@@ -41,6 +41,7 @@ Slam::Slam(const Config& config, std::shared_ptr<const Vocabulary> vocabulary)
   odometry_fitting_.measure_ambiguity = true;
   const CameraIntrinsics k = intrinsicsOf(config.camera);
   mount_baseline_m_ = config.outdoor.baseline_fraction * std::min(k.width, k.height) * ground_sample_m_;
+  mount_pair_radius_m_ = config.outdoor.pair_radius_px * ground_sample_m_;
   odometry_fitting_.rival_max_rotation_rad = 1.0 * M_PI / 180.0;
   if (config.loop_closure.enabled && vocabulary && !vocabulary->empty()) {
     loop_closer_.emplace(config.loop_closure, std::move(vocabulary), config.matching, config.odometry, config.localization);
@@ -293,7 +294,8 @@ OdometryEdge Slam::estimateOdometry(const Keyframe& previous, const Keyframe& cu
   // matches one repetition over; such a fit has rivals nearly as good and is not a motion.
   if (fit.ok() && fit.ambiguity() > config_.odometry_checks.max_ambiguity) fit.status = FitStatus::ambiguous;
 
-  OdometryEdge edge{fit.T_target_source, fit.covariance, result.matches, fit.inliers, fit.status, false, std::move(used)};
+  OdometryEdge edge{fit.T_target_source, fit.covariance, result.matches, fit.inliers, fit.status, false, std::move(used),
+                    fit.rms_residual_m};
   return fit.ok() ? edge : fallbackOdometry(edge);
 }
 
@@ -303,7 +305,7 @@ std::vector<Slam::MountReference> Slam::mountReferences(const Keyframe& current,
   const Pose2 T_world_current = graph_.poses().back() * odometry.T_prev_curr;
   FitSettings settings = odometry_fitting_;
   settings.measure_ambiguity = false;
-  const double inlier2 = settings.ransac_inlier_m * settings.ransac_inlier_m;
+  const double inlier2 = mount_pair_radius_m_ * mount_pair_radius_m_;
   const Keyframe* last_used = nullptr;
   for (const double reach : {mount_baseline_m_, 0.5 * mount_baseline_m_}) {
     for (const Keyframe& candidate : recent_) {
@@ -342,7 +344,7 @@ void Slam::estimateMountOf(const Keyframe& previous, Keyframe& current, Odometry
   // The previous frame and, when there are any, frames farther back: the tilt shows better over a baseline.
   std::vector<MountReference> references = mountReferences(current, odometry);
   MountReference from_previous{&previous, {}, odometry.T_prev_curr};
-  const double inlier2 = config_.odometry.ransac_inlier_m * config_.odometry.ransac_inlier_m;
+  const double inlier2 = mount_pair_radius_m_ * mount_pair_radius_m_;
   for (const Match& m : odometry.used) {
     const size_t q = static_cast<size_t>(m.query), t = static_cast<size_t>(m.train);
     if ((odometry.T_prev_curr * current.features.points[q] - previous.features.points[t]).squaredNorm() <= inlier2) {
@@ -376,9 +378,9 @@ void Slam::estimateMountOf(const Keyframe& previous, Keyframe& current, Odometry
   const double calibrated_height = calibrated_mount_.translation().z();
   ++mount_estimates_;
   const double keep_tilt = tilt_spread_.keep(0.5 * (e.roll_rad * e.roll_rad + e.pitch_rad * e.pitch_rad),
-                                             0.5 * estimate.tilt_covariance.trace(), mount_estimates_);
+                                             config_.outdoor.variance_inflation * 0.5 * estimate.tilt_covariance.trace(), mount_estimates_);
   const double keep_height = height_spread_.keep((e.height_m - calibrated_height) * (e.height_m - calibrated_height),
-                                                 estimate.height_variance, mount_estimates_);
+                                                 config_.outdoor.variance_inflation * estimate.height_variance, mount_estimates_);
   Keyframe reprojected = current;
   reprojected.mount = {keep_tilt * e.roll_rad, keep_tilt * e.pitch_rad,
                        calibrated_height + (1.0 - config_.outdoor.height_return) * keep_height * (e.height_m - calibrated_height)};
@@ -388,7 +390,8 @@ void Slam::estimateMountOf(const Keyframe& previous, Keyframe& current, Odometry
   refit.measure_ambiguity = false;
   const RigidEstimate fit = fitMatches(odometry.used, previous, reprojected, refit);
   result.times.fit_ms += timer.lap();
-  if (!fit.ok()) return;
+  // A right mount brings the matched points closer together; one that does not is not used.
+  if (!fit.ok() || fit.rms_residual_m >= odometry.rms_residual_m) return;
   current = std::move(reprojected);
   odometry.T_prev_curr = fit.T_target_source;
   odometry.covariance = fit.covariance;

@@ -43,6 +43,7 @@ struct OdometryEdge {
   FitStatus fit_status = FitStatus::ok;
   bool fallback = false;  ///< the fit failed and the previous motion was assumed
   std::vector<Match> used;  ///< the matches the fit used (still ones left out)
+  double rms_residual_m = 0.0;  ///< of the fit's inliers
 };
 
 class Slam {
@@ -118,6 +119,7 @@ class Slam {
   double ground_sample_m_ = 0.0;   ///< metres per pixel at the image centre
   ArtifactMask artifact_mask_;
   double mount_baseline_m_ = 0.0;
+  double mount_pair_radius_m_ = 0.0;
   /// How much the mount really rocks and bounces, against how noisy one frame's estimate is: running means
   /// of the estimates' squared departure from the calibrated mount and of their variance. A rigid mount's
   /// estimates are all noise, and are then shrunk to the calibrated mount.

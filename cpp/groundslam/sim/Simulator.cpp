@@ -82,15 +82,38 @@ void SequenceSimulator::prepareArtifacts() {
     dirt_ = cv::Mat(k.height, k.width, CV_32F, cv::Scalar(1.0f));
     for (int b = 0; b < a.lens_dirt; ++b) {
       const double u = rng.uniform(0.1, 0.9) * k.width, v = rng.uniform(0.1, 0.9) * k.height;
-      // Small sharp specks and large soft smudges.
-      const double sigma = scale * (b % 2 == 0 ? rng.uniform(1.5, 3.0) : rng.uniform(6.0, 14.0));
-      const double opacity = rng.uniform(0.4, 0.8);
-      for (int row = std::max(0, static_cast<int>(v - 4 * sigma)); row < std::min(k.height, static_cast<int>(v + 4 * sigma) + 1); ++row) {
-        for (int col = std::max(0, static_cast<int>(u - 4 * sigma)); col < std::min(k.width, static_cast<int>(u + 4 * sigma) + 1); ++col) {
-          const double r2 = ((col - u) * (col - u) + (row - v) * (row - v)) / (sigma * sigma);
-          dirt_.at<float>(row, col) *= static_cast<float>(1.0 - opacity * std::exp(-0.5 * r2));
+      // Opaque specks of mud with a sharp rim, and large soft smudges.
+      const bool speck = b % 2 == 0;
+      const double radius = scale * (speck ? rng.uniform(2.0, 5.0) : rng.uniform(6.0, 14.0));
+      const double opacity = speck ? rng.uniform(0.85, 0.95) : rng.uniform(0.3, 0.6);
+      const double rim = speck ? 0.7 * scale : 0.5 * radius;
+      const double reach = radius + 3.0 * rim;
+      for (int row = std::max(0, static_cast<int>(v - reach)); row < std::min(k.height, static_cast<int>(v + reach) + 1); ++row) {
+        for (int col = std::max(0, static_cast<int>(u - reach)); col < std::min(k.width, static_cast<int>(u + reach) + 1); ++col) {
+          const double r = std::hypot(col - u, row - v);
+          const double cover = 1.0 / (1.0 + std::exp((r - radius) / rim));  // 1 inside, 0 outside, smooth rim
+          dirt_.at<float>(row, col) *= static_cast<float>(1.0 - opacity * cover);
         }
       }
+    }
+  }
+  if (a.bumper > 0.0) {
+    // A dark plate along the bottom of the image with a rough edge and bright bolts: it never moves.
+    bumper_ = cv::Mat(k.height, k.width, CV_32F, cv::Scalar(0.15f));
+    bumper_cover_ = cv::Mat::zeros(k.height, k.width, CV_32F);
+    const double top = (1.0 - a.bumper) * k.height;
+    for (int col = 0; col < k.width; ++col) {
+      const double edge = top + 2.0 * scale * std::sin(col * 0.21 / scale) + 1.5 * scale * std::sin(col * 0.057 / scale);
+      for (int row = std::max(0, static_cast<int>(edge) - 2); row < k.height; ++row) {
+        bumper_cover_.at<float>(row, col) = static_cast<float>(std::clamp(row - edge + 0.5, 0.0, 1.0));
+      }
+    }
+    for (int bolt = 0; bolt < 12; ++bolt) {
+      const double u = rng.uniform(0.05, 0.95) * k.width, v = rng.uniform(top + 3.0 * scale, static_cast<double>(k.height));
+      cv::circle(bumper_, cv::Point(static_cast<int>(u), static_cast<int>(v)), std::max(1, static_cast<int>(2.5 * scale)),
+                 cv::Scalar(0.9), cv::FILLED);
+      cv::rectangle(bumper_, cv::Rect(static_cast<int>(u + 6 * scale), static_cast<int>(v), static_cast<int>(5 * scale) + 1,
+                                      static_cast<int>(3 * scale) + 1), cv::Scalar(0.6), cv::FILLED);
     }
   }
   if (a.glare > 0.0) {
@@ -110,7 +133,7 @@ GroundShadow SequenceSimulator::shadowAt(const Pose2& pose) const {
   shadow.darkness = settings_.artifacts.shadow;
   shadow.direction_robot = Eigen::Rotation2Dd(-pose.theta) * sun_direction_world_;  // the sun stays, the robot turns
   shadow.offset_m = shadow_offset_m_;
-  shadow.softness_m = 0.004;
+  shadow.softness_m = 0.0015;  // the sun's half degree over the body's height above the ground
   return shadow;
 }
 
@@ -214,6 +237,7 @@ cv::Mat SequenceSimulator::renderFrame(int index) const {
   }
   if (!dirt_.empty()) radiance = radiance.mul(dirt_);
   if (!glare_.empty()) radiance += glare_;
+  if (!bumper_.empty()) radiance = radiance.mul(1.0 - bumper_cover_) + bumper_.mul(bumper_cover_);
   return expose(radiance, settings_.photometry, index, settings_.seed);
 }
 

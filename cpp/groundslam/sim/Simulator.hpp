@@ -27,6 +27,7 @@ struct CameraArtifacts {
   double shadow = 0.0;     ///< darkness of the robot's own shadow (0: none, 1: black); its edge turns with the heading
   int lens_dirt = 0;       ///< dark blotches fixed on the lens
   double glare = 0.0;      ///< peak of a bright patch fixed in the image (the robot's lamp), albedo units; 1 saturates
+  double bumper = 0.0;     ///< share of the image height hidden by a part of the robot in view (bolts, edges: strong corners)
 };
 
 /// Motion harder than the path's own: sharp turns on the spot.
@@ -89,6 +90,7 @@ class SequenceSimulator {
   std::vector<double> spin_rad_;             ///< heading added by sharp turns, per frame
   cv::Mat dirt_;                             ///< transmission of the lens per pixel (CV_32F), empty: clean
   cv::Mat glare_;                            ///< radiance added per pixel (CV_32F), empty: none
+  cv::Mat bumper_, bumper_cover_;            ///< the robot part's radiance and coverage per pixel (CV_32F), empty: none
   Eigen::Vector2d sun_direction_world_ = Eigen::Vector2d::UnitX();
   double shadow_offset_m_ = 0.0;
   GroundTexture dry_, wet_;
