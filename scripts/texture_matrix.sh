@@ -2,7 +2,9 @@
 # Simulates every texture kind on every path with the standard perturbations (mount jitter 0.5 deg,
 # motion and defocus blur, noise, exposure changes, vignetting, wet ground after 60% of the path), runs
 # groundslam on each twice (full SLAM and --no-loop-closure) and prints a markdown table row per sequence.
-# Usage: scripts/texture_matrix.sh [BIN] [OUT] [EXTRA RUN ARGS...]   (env: FRAMES, KINDS, PATHS_)
+# CONDITION=outdoor adds what an outdoor robot sees: its own shadow, lens dirt, glare, a part of the robot in
+# view, 2 mm height jitter, 90-degree turns on the spot every 80 frames and dropped frames.
+# Usage: scripts/texture_matrix.sh [BIN] [OUT] [EXTRA RUN ARGS...]   (env: FRAMES, KINDS, PATHS_, SEED, CONDITION)
 set -euo pipefail
 bin=${1:-build/groundslam}
 out=${2:-data/matrix}
@@ -10,28 +12,45 @@ shift 2 || true
 frames=${FRAMES:-400}
 kinds=${KINDS:-"asphalt concrete carpet tiles"}
 paths=${PATHS_:-"loop lawnmower random_walk"}
-echo "| texture | path | frames | odometry cm/m | odometry deg | SLAM cm/m | SLAM deg | SLAM ATE mm | loops accepted | wrong | precision | recall | fallback or lost frames |"
-echo "|---|---|---|---|---|---|---|---|---|---|---|---|---|"
+seed=${SEED:-11}
+condition=${CONDITION:-standard}
+here=$(cd "$(dirname "$0")" && pwd)
+case "$condition" in
+  standard) extra_sim=() ;;
+  outdoor) extra_sim=(--shadow 0.6 --lens-dirt 6 --glare 0.8 --bumper 0.15 --height-jitter-m 0.002 --spin-every 80
+                      --spin-deg 90 --drop-frames 0.01 --drop-max 6) ;;
+  outdoor_heavy) extra_sim=(--shadow 0.8 --lens-dirt 10 --glare 1.2 --bumper 0.25 --height-jitter-m 0.003 --spin-every 50
+                            --spin-deg 75 --drop-frames 0.02 --drop-max 8) ;;
+  *) echo "unknown CONDITION '$condition' (standard | outdoor | outdoor_heavy)" >&2; exit 2 ;;
+esac
+echo "| texture | path | frames | odometry cm/m | odometry deg | SLAM cm/m | SLAM deg | SLAM ATE mm | loops accepted | wrong | precision | recall | fallback or lost frames | wrong ok motions | tilt error deg |"
+echo "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
 for kind in $kinds; do
   for path in $paths; do
     seq="$out/${kind}_${path}"
     if [ ! -f "$seq/sequence.txt" ]; then
       "$bin" simulate "$seq" --texture-kind "$kind" --path "$path" --frames "$frames" --laps 2 \
         --jitter-deg 0.5 --motion-blur 0.3 --defocus-px 0.6 --noise 2 --exposure-variation 0.15 \
-        --vignetting 0.2 --wet-after 0.6 --seed 11 >/dev/null
+        --vignetting 0.2 --wet-after 0.6 --seed "$seed" "${extra_sim[@]}" >/dev/null
     fi
     "$bin" run "$seq/sequence.txt" --out "$out/runs/${kind}_${path}" "$@" >/dev/null
     "$bin" run "$seq/sequence.txt" --out "$out/runs/${kind}_${path}_odometry" --no-loop-closure "$@" >/dev/null
     fallback=$(grep -cE ",(fallback|lost)" "$out/runs/${kind}_${path}/frames.csv" || true)
-    /usr/bin/python3 - "$out/runs/${kind}_${path}" "$kind" "$path" "$fallback" <<'PY'
+    motion="{}"
+    if [ -f "$seq/mount.csv" ]; then motion=$(/usr/bin/python3 "$here/motion_check.py" "$out/runs/${kind}_${path}" "$seq" --json); fi
+    /usr/bin/python3 - "$out/runs/${kind}_${path}" "$kind" "$path" "$fallback" "$motion" <<'PY'
 import json, sys
-run, kind, path, fallback = sys.argv[1:5]
+run, kind, path, fallback, motion = sys.argv[1:6]
 m = json.load(open(run + "/metrics.json"))
 o = json.load(open(run + "_odometry/metrics.json"))
+c = json.loads(motion)
 l = m["loop_closure"]
+wrong = c.get("silent_wrong_motions", "n/a")
+tilt = c.get("tilt_rms_error_deg")
+tilt = f"{tilt:.2f} of {c['tilt_rms_true_deg']:.2f}" if isinstance(tilt, float) and tilt == tilt else "n/a"
 print(f"| {kind} | {path} | {m['paired_frames']} | {o['translation_mae_cm_per_m']:.3f} | {o['rotation_mae_deg']:.3f} | "
       f"{m['translation_mae_cm_per_m']:.3f} | {m['rotation_mae_deg']:.3f} | {1000 * m['ate_rmse_m']:.2f} | "
-      f"{l['accepted']} | {l['wrong_accepted']} | {l['precision']:.3f} | {l['recall']:.3f} | {fallback} |")
+      f"{l['accepted']} | {l['wrong_accepted']} | {l['precision']:.3f} | {l['recall']:.3f} | {fallback} | {wrong} | {tilt} |")
 PY
   done
 done

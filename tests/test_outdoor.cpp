@@ -7,6 +7,10 @@
 
 #include "groundslam/core/CameraModel.hpp"
 #include "groundslam/core/MountEstimation.hpp"
+#include "groundslam/core/StillFeatures.hpp"
+#include "groundslam/eval/TrajectoryMetrics.hpp"
+#include "groundslam/pipeline/Slam.hpp"
+#include "groundslam/sim/Simulator.hpp"
 
 using namespace groundslam;
 
@@ -89,4 +93,213 @@ TEST(MountEstimation, TooFewPairsIsNoEstimate) {
   pairs.reference.resize(10);
   pairs.current.resize(10);
   EXPECT_FALSE(estimateMount(pairs.reference, pairs.current, defaultCameraMount(0.25), level, Pose2(), {}).ok);
+}
+
+namespace {
+
+cv::Mat randomDescriptor(std::mt19937& rng) {
+  cv::Mat d(1, 32, CV_8U);
+  for (int i = 0; i < 32; ++i) d.at<std::uint8_t>(0, i) = static_cast<std::uint8_t>(rng() & 0xFF);
+  return d;
+}
+
+/// A frame of synthetic features: ground points seen from `pose`, and features fixed in the image.
+struct SyntheticScene {
+  CameraModel camera{hdGroundAt320(), defaultCameraMount(0.25)};
+  std::vector<Eigen::Vector2d> ground_world;
+  std::vector<cv::Mat> ground_descriptors;
+  std::vector<Eigen::Vector2d> still_pixels;
+  std::vector<cv::Mat> still_descriptors;
+
+  SyntheticScene(int ground, int still, unsigned seed) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<double> ux(-0.15, 0.45), uy(-0.1, 0.1), u(0.0, 1.0);
+    for (int i = 0; i < ground; ++i) {
+      ground_world.emplace_back(ux(rng), uy(rng));
+      ground_descriptors.push_back(randomDescriptor(rng));
+    }
+    for (int i = 0; i < still; ++i) {
+      // A band along the bottom of the image, like a bumper in view.
+      still_pixels.emplace_back(10.0 + 300.0 * u(rng), 200.0 + 30.0 * u(rng));
+      still_descriptors.push_back(randomDescriptor(rng));
+    }
+  }
+
+  PreparedFrame frameAt(const Pose2& pose, double timestamp) const {
+    PreparedFrame frame;
+    frame.timestamp = timestamp;
+    const auto add = [&](const Eigen::Vector2d& pixel, const cv::Mat& descriptor) {
+      const CameraIntrinsics& k = camera.intrinsics();
+      if (pixel.x() < 0 || pixel.y() < 0 || pixel.x() >= k.width || pixel.y() >= k.height) return;
+      const Eigen::Vector2d ray((pixel.x() - k.cx) / k.fx, (pixel.y() - k.cy) / k.fy);
+      frame.features.points.push_back(*CameraModel::intersectGround(ray, camera.T_robot_camera()));
+      frame.features.rays.push_back(ray);
+      frame.features.descriptors.push_back(descriptor);
+    };
+    for (size_t i = 0; i < ground_world.size(); ++i) {
+      if (const auto pixel = camera.groundToPixel(pose.inverse() * ground_world[i])) add(*pixel, ground_descriptors[i]);
+    }
+    for (size_t i = 0; i < still_pixels.size(); ++i) add(still_pixels[i], still_descriptors[i]);
+    return frame;
+  }
+};
+
+Config syntheticConfig(bool reject_still) {
+  Config config;
+  config.camera = cameraConfigOf(hdGroundAt320(), 0.25);
+  config.loop_closure.enabled = false;
+  config.outdoor.reject_still = reject_still;
+  config.outdoor.estimate_mount = false;  // the synthetic points have no pixel noise to estimate from
+  return config;
+}
+
+}  // namespace
+
+TEST(StillFeatures, SplitsMatchesAtTheSamePlaceInTheImage) {
+  GroundFeatures a, b;
+  for (int i = 0; i < 4; ++i) {
+    a.points.emplace_back(0.0, 0.0);
+    b.points.emplace_back(0.0, 0.0);
+    a.rays.emplace_back(0.1 * i, 0.0);
+    b.rays.emplace_back(0.1 * i + (i < 2 ? 0.001 : 0.05), 0.0);  // two still, two moved by 22 px
+  }
+  const std::vector<Match> matches = {{0, 0, 0}, {1, 1, 0}, {2, 2, 0}, {3, 3, 0}};
+  const StillSplit split = splitStillMatches(matches, a, b, 1.5 / 439.0);
+  ASSERT_EQ(split.still.size(), 2u);
+  EXPECT_EQ(split.still[0].query, 0);
+  EXPECT_EQ(split.still[1].query, 1);
+  EXPECT_EQ(split.moving.size(), 2u);
+}
+
+TEST(StillFeatures, MaskLearnsCellsThatStayStillAndForgetsThem) {
+  ArtifactMask mask(hdGroundAt320(), ArtifactMaskSettings{});
+  GroundFeatures current;
+  current.points = {{0, 0}, {0, 0}};
+  current.rays = {{0.2, 0.2}, {-0.2, -0.2}};  // bottom right and top left of the image
+  current.descriptors = cv::Mat::zeros(2, 32, CV_8U);
+  const std::vector<Match> still = {{0, 0, 0}}, moving = {{1, 1, 0}};
+  EXPECT_FALSE(mask.isArtifact(current.rays[0]));
+  for (int frame = 0; frame < 3; ++frame) mask.observe(current, still, moving);
+  EXPECT_TRUE(mask.isArtifact(current.rays[0]));
+  EXPECT_FALSE(mask.isArtifact(current.rays[1]));
+  EXPECT_EQ(mask.artifactCells(), 1);
+  EXPECT_EQ(mask.withoutArtifacts(current).size(), 1u);
+  // The artifact goes (a shadow turned away): the cell now sees ground moving, and is freed.
+  for (int frame = 0; frame < 5; ++frame) mask.observe(current, {}, {{0, 0, 0}});
+  EXPECT_FALSE(mask.isArtifact(current.rays[0]));
+}
+
+TEST(StillFeatures, OdometryIgnoresAPartOfTheRobotInView) {
+  // 300 features fixed in the image outnumber the ground's matches: fitted with them, the motion is either
+  // zero or ambiguous. Without them it is the robot's 15 mm per frame.
+  const SyntheticScene scene(900, 300, 5);
+  for (const bool reject : {true, false}) {
+    Slam slam(syntheticConfig(reject), nullptr);
+    int right = 0;
+    for (int i = 0; i < 8; ++i) {
+      const FrameResult r = slam.process(scene.frameAt(Pose2(0.015 * i, 0.0, 0.02 * i), i));
+      if (i == 0) continue;
+      const Pose2 expected = between(Pose2(0.015 * (i - 1), 0.0, 0.02 * (i - 1)), Pose2(0.015 * i, 0.0, 0.02 * i));
+      const bool ok = r.status == "ok" && (r.odometry.translation() - expected.translation()).norm() < 1e-4 &&
+                      std::abs(r.odometry.theta - expected.theta) < 1e-4;
+      right += ok ? 1 : 0;
+      if (reject) {
+        EXPECT_TRUE(ok) << "frame " << i << ": " << r.status << " " << r.odometry.x << " " << r.odometry.y;
+        EXPECT_GE(r.still_matches, 250) << i;
+      }
+    }
+    if (!reject) {
+      EXPECT_EQ(right, 0) << "the still features should have spoilt every frame";
+    }
+  }
+}
+
+namespace {
+
+struct OutdoorRun {
+  int ok_frames = 0;
+  int wrong_ok = 0;        ///< frames reported ok whose motion is off by more than 5 mm or 0.5 degrees
+  double ate_m = 0.0;
+  double tilt_error_rad = 0.0;  ///< RMS over frames with an estimate
+  double tilt_rad = 0.0;        ///< RMS of the true tilt over the same frames
+};
+
+/// A rocking, bouncing mount over asphalt, 1 cm per frame; `outdoor` adds the robot's shadow, lens dirt,
+/// glare, a part of the robot in view, 90-degree turns on the spot every 40 frames and dropped frames.
+sim::SimulationSettings rockingSequence(bool outdoor) {
+  sim::SimulationSettings s;
+  s.path.kind = sim::PathKind::loop;
+  s.path.frames = 140;
+  s.path.laps = 1;
+  s.mount_jitter_deg = 0.5;
+  s.height_jitter_m = 0.002;
+  s.photometry.noise_sigma = 2.0;
+  s.seed = 3;
+  if (outdoor) {
+    s.motion_blur = 0.3;
+    s.artifacts = {0.6, 6, 0.8, 0.15};
+    s.motion = {40, 90.0};
+  }
+  return s;
+}
+
+/// Odometry alone (no loop closure) over a simulated sequence, checked frame by frame.
+OutdoorRun runOdometry(const sim::SimulationSettings& s, double drop_probability, bool estimate_mount) {
+  const sim::SequenceSimulator simulator(s);
+  const std::vector<bool> dropped = sim::droppedFrames(simulator.frameCount(), drop_probability, 4, s.seed);
+  Config config;
+  config.camera = cameraConfigOf(s.camera, s.mounting_height_m);
+  config.outdoor.estimate_mount = estimate_mount;
+  Slam slam(config, nullptr);
+  OutdoorRun run;
+  Trajectory truth;
+  std::optional<int> previous;
+  double tilt_error2 = 0.0, tilt2 = 0.0;
+  int estimated = 0;
+  for (int i = 0; i < simulator.frameCount(); ++i) {
+    if (dropped[static_cast<size_t>(i)]) continue;
+    const FrameResult r = slam.process(simulator.renderFrame(i), i);
+    truth.push_back({double(i), simulator.groundTruth()[size_t(i)]});
+    if (previous && r.status == "ok") {
+      ++run.ok_frames;
+      const Pose2 expected = between(simulator.groundTruth()[size_t(*previous)], simulator.groundTruth()[size_t(i)]);
+      if ((r.odometry.translation() - expected.translation()).norm() > 0.005 ||
+          std::abs(wrapAngle(r.odometry.theta - expected.theta)) > 0.5 * kDeg) {
+        ++run.wrong_ok;
+      }
+    }
+    if (r.mount_estimated) {
+      const Eigen::Vector3d true_mount = simulator.mountStateAt(i);
+      tilt_error2 += std::pow(r.mount.roll_rad - true_mount.x(), 2) + std::pow(r.mount.pitch_rad - true_mount.y(), 2);
+      tilt2 += true_mount.x() * true_mount.x() + true_mount.y() * true_mount.y();
+      ++estimated;
+    }
+    previous = i;
+  }
+  run.ate_m = evaluateTrajectory(truth, slam.trajectory()).metrics.ate_rmse_m;
+  run.tilt_error_rad = std::sqrt(tilt_error2 / std::max(1, 2 * estimated));
+  run.tilt_rad = std::sqrt(tilt2 / std::max(1, 2 * estimated));
+  return run;
+}
+
+}  // namespace
+
+TEST(OutdoorSequence, MountEstimateReducesTheRockingError) {
+  // Measured: ATE 2.75 mm with the estimate, 3.14 mm without; tilt error 0.36 degrees of the true 0.50. A
+  // wrong sign or axis in the estimate makes both worse than no estimate at all.
+  const OutdoorRun with = runOdometry(rockingSequence(false), 0.0, true);
+  const OutdoorRun without = runOdometry(rockingSequence(false), 0.0, false);
+  EXPECT_EQ(with.wrong_ok, 0);
+  EXPECT_LT(with.ate_m, 0.95 * without.ate_m);
+  EXPECT_LT(with.tilt_error_rad, 0.85 * with.tilt_rad);
+}
+
+TEST(OutdoorSequence, TrackedThroughArtifactsSharpTurnsAndDroppedFrames) {
+  // Shadow, lens dirt, glare, a bumper in view, 90-degree turns and dropped frames. Measured: 129 of 135
+  // frames ok, one of them 5.5 mm off (a quarter turn: the rocking mount's 2 mm footprint shift adds up
+  // instead of cancelling), ATE 3.8 mm.
+  const OutdoorRun run = runOdometry(rockingSequence(true), 0.03, true);
+  EXPECT_GE(run.ok_frames, 120);
+  EXPECT_LE(run.wrong_ok, 2);
+  EXPECT_LT(run.ate_m, 0.006);
 }
