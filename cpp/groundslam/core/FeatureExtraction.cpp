@@ -11,17 +11,36 @@ OrbExtractor::OrbExtractor(const OrbSettings& s)
     : orb_(cv::ORB::create(s.num_features, static_cast<float>(s.scale_factor), s.num_levels, s.edge_threshold, 0, 2,
                            s.score_type == "fast" ? cv::ORB::FAST_SCORE : cv::ORB::HARRIS_SCORE, s.patch_size,
                            s.fast_threshold)),
-      subpixel_window_(s.subpixel_window) {}
+      subpixel_window_(s.subpixel_window),
+      flatten_window_(s.flatten_window) {}
+
+cv::Mat flattenIllumination(const cv::Mat& gray_image, double sigma_px) {
+  // The background light: a Gaussian blur computed on an image reduced to a few pixels per sigma (cheap at
+  // any resolution), brought back to full size bilinearly: smooth, no ringing.
+  const double reduce = std::max(1.0, sigma_px / 4.0);
+  cv::Mat small, background, flat;
+  cv::resize(gray_image, small, cv::Size(), 1.0 / reduce, 1.0 / reduce, cv::INTER_AREA);
+  small.convertTo(small, CV_32F);
+  cv::GaussianBlur(small, small, cv::Size(0, 0), sigma_px / reduce, 0.0, cv::BORDER_REFLECT);
+  cv::resize(small, background, gray_image.size(), 0.0, 0.0, cv::INTER_LINEAR);
+  // 128 + image - background, saturating: a smooth change of light becomes a constant grey.
+  cv::Mat image;
+  gray_image.convertTo(image, CV_32F);
+  cv::Mat(image - background + 128.0f).convertTo(flat, CV_8U);
+  return flat;
+}
 
 ImageFeatures OrbExtractor::detect(const cv::Mat& gray_image) const {
   ImageFeatures features;
-  orb_->detectAndCompute(gray_image, cv::noArray(), features.keypoints, features.descriptors);
+  const double sigma_px = flatten_window_ * gray_image.cols;
+  const cv::Mat image = sigma_px >= 1.0 ? flattenIllumination(gray_image, sigma_px) : gray_image;
+  orb_->detectAndCompute(image, cv::noArray(), features.keypoints, features.descriptors);
   if (subpixel_window_ > 0 && !features.keypoints.empty()) {
     // FAST positions are whole pixels of their pyramid level; refining them to the gradient-weighted
     // corner reduces the noise of every fit that uses them.
     std::vector<cv::Point2f> corners;
     for (const auto& kp : features.keypoints) corners.push_back(kp.pt);
-    cv::cornerSubPix(gray_image, corners, cv::Size(subpixel_window_, subpixel_window_), cv::Size(-1, -1),
+    cv::cornerSubPix(image, corners, cv::Size(subpixel_window_, subpixel_window_), cv::Size(-1, -1),
                      cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 10, 0.01));
     for (size_t i = 0; i < corners.size(); ++i) {
       // A refinement that wanders off the keypoint is not a refinement.

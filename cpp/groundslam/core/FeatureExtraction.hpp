@@ -23,6 +23,10 @@ struct OrbSettings {
   std::string score_type = "harris";  ///< harris | fast
   int near_twin_max_distance = 0;     ///< drop descriptors this close (Hamming) to another of the same image; 0 keeps all
   int subpixel_window = 0;            ///< half-size of the cornerSubPix window refining keypoints; 0 = off
+  /// > 0: before ORB, the image's background light (a Gaussian blur whose sigma is this fraction of the image
+  /// width) is subtracted, so that smooth light changes fixed in the image (a lamp's glare, vignetting, a soft
+  /// shadow) do not change the descriptors of the ground passing under them. 0 = off.
+  double flatten_window = 0.03;
 };
 
 /// Keypoints in pixels with their descriptors (row i describes keypoint i).
@@ -47,6 +51,9 @@ struct GroundFeatures {
   size_t size() const { return points.size(); }
 };
 
+/// The image minus its background light (a Gaussian blur of `sigma_px`), around grey 128 (8-bit, saturating).
+cv::Mat flattenIllumination(const cv::Mat& gray_image, double sigma_px);
+
 class OrbExtractor {
  public:
   explicit OrbExtractor(const OrbSettings& settings);
@@ -55,6 +62,7 @@ class OrbExtractor {
  private:
   cv::Ptr<cv::ORB> orb_;
   int subpixel_window_;
+  double flatten_window_;
 };
 
 /// Keeps the keypoints whose ray meets the ground, as metric points (pixel keypoints are not kept).
