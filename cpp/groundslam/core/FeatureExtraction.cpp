@@ -12,15 +12,23 @@ OrbExtractor::OrbExtractor(const OrbSettings& s)
                            s.score_type == "fast" ? cv::ORB::FAST_SCORE : cv::ORB::HARRIS_SCORE, s.patch_size,
                            s.fast_threshold)),
       subpixel_window_(s.subpixel_window),
-      flatten_window_(s.flatten_window) {}
+      flatten_window_(s.flatten_window),
+      flatten_min_range_(s.flatten_min_range) {}
 
-cv::Mat flattenIllumination(const cv::Mat& gray_image, double sigma_px) {
+cv::Mat flattenIllumination(const cv::Mat& gray_image, double sigma_px, double min_range) {
   // The background light: a Gaussian blur computed on an image reduced to a few pixels per sigma (cheap at
   // any resolution), brought back to full size bilinearly: smooth, no ringing.
   const double reduce = std::max(1.0, sigma_px / 4.0);
   cv::Mat small, background, flat;
   cv::resize(gray_image, small, cv::Size(), 1.0 / reduce, 1.0 / reduce, cv::INTER_AREA);
   small.convertTo(small, CV_32F);
+  // Is there a patch of light much wider than any floor pattern (a lamp's glare)? Judged on a blur five
+  // times wider, which leaves tiles, stains and grout lines out.
+  cv::Mat wide;
+  cv::GaussianBlur(small, wide, cv::Size(0, 0), 5.0 * sigma_px / reduce, 0.0, cv::BORDER_REFLECT);
+  double darkest = 0.0, brightest = 0.0;
+  cv::minMaxLoc(wide, &darkest, &brightest);
+  if (brightest - darkest < min_range) return gray_image;  // even light: the image is used as it is
   cv::GaussianBlur(small, small, cv::Size(0, 0), sigma_px / reduce, 0.0, cv::BORDER_REFLECT);
   cv::resize(small, background, gray_image.size(), 0.0, 0.0, cv::INTER_LINEAR);
   // 128 + image - background, saturating: a smooth change of light becomes a constant grey.
@@ -33,7 +41,7 @@ cv::Mat flattenIllumination(const cv::Mat& gray_image, double sigma_px) {
 ImageFeatures OrbExtractor::detect(const cv::Mat& gray_image) const {
   ImageFeatures features;
   const double sigma_px = flatten_window_ * gray_image.cols;
-  const cv::Mat image = sigma_px >= 1.0 ? flattenIllumination(gray_image, sigma_px) : gray_image;
+  const cv::Mat image = sigma_px >= 1.0 ? flattenIllumination(gray_image, sigma_px, flatten_min_range_) : gray_image;
   orb_->detectAndCompute(image, cv::noArray(), features.keypoints, features.descriptors);
   if (subpixel_window_ > 0 && !features.keypoints.empty()) {
     // FAST positions are whole pixels of their pyramid level; refining them to the gradient-weighted

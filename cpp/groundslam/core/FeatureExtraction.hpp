@@ -27,6 +27,10 @@ struct OrbSettings {
   /// width) is subtracted, so that smooth light changes fixed in the image (a lamp's glare, vignetting, a soft
   /// shadow) do not change the descriptors of the ground passing under them. 0 = off.
   double flatten_window = 0.03;
+  /// Flattening removes the ground's own slow changes too, which tells one tile of a repeated pattern from
+  /// the next: it applies only to images whose background light spans this many grey levels (a lamp's
+  /// glare does; vignetting and exposure changes do not), judged over areas five times flatten_window.
+  double flatten_min_range = 40.0;
 };
 
 /// Keypoints in pixels with their descriptors (row i describes keypoint i).
@@ -51,8 +55,9 @@ struct GroundFeatures {
   size_t size() const { return points.size(); }
 };
 
-/// The image minus its background light (a Gaussian blur of `sigma_px`), around grey 128 (8-bit, saturating).
-cv::Mat flattenIllumination(const cv::Mat& gray_image, double sigma_px);
+/// The image minus its background light (a Gaussian blur of `sigma_px`), around grey 128 (8-bit, saturating),
+/// when the light over areas five times wider differs by `min_range` grey levels or more; else the image.
+cv::Mat flattenIllumination(const cv::Mat& gray_image, double sigma_px, double min_range);
 
 class OrbExtractor {
  public:
@@ -63,6 +68,7 @@ class OrbExtractor {
   cv::Ptr<cv::ORB> orb_;
   int subpixel_window_;
   double flatten_window_;
+  double flatten_min_range_;
 };
 
 /// Keeps the keypoints whose ray meets the ground, as metric points (pixel keypoints are not kept).
