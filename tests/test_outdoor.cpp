@@ -4,6 +4,7 @@
 #include <random>
 
 #include <gtest/gtest.h>
+#include <opencv2/imgproc.hpp>
 
 #include "groundslam/core/CameraModel.hpp"
 #include "groundslam/core/MountEstimation.hpp"
@@ -302,4 +303,36 @@ TEST(OutdoorSequence, TrackedThroughArtifactsSharpTurnsAndDroppedFrames) {
   EXPECT_GE(run.ok_frames, 120);
   EXPECT_LE(run.wrong_ok, 2);
   EXPECT_LT(run.ate_m, 0.006);
+}
+
+TEST(IlluminationFlattening, RemovesAGlareAndLeavesEvenLightAlone) {
+  // A fine random floor (grey 60-140) under a glare patch of up to +130 grey levels.
+  cv::Mat floor(240, 320, CV_8U);
+  cv::RNG rng(3);
+  rng.fill(floor, cv::RNG::UNIFORM, 60, 140);
+  cv::GaussianBlur(floor, floor, cv::Size(0, 0), 1.0);
+  cv::Mat glare(floor.size(), CV_32F);
+  for (int row = 0; row < glare.rows; ++row) {
+    for (int col = 0; col < glare.cols; ++col) {
+      glare.at<float>(row, col) = static_cast<float>(130.0 * std::exp(-0.5 * (std::pow(col - 160, 2) + std::pow(row - 120, 2)) / (32.0 * 32.0)));
+    }
+  }
+  cv::Mat floor_f, lit;
+  floor.convertTo(floor_f, CV_32F);
+  cv::Mat(floor_f + glare).convertTo(lit, CV_8U);
+  const cv::Mat flat_lit = flattenIllumination(lit, 0.03 * 320, 35.0);
+  const cv::Mat flat_floor = flattenIllumination(floor, 0.03 * 320, 35.0);
+  // Even light: the image comes back as it is (flattening would erase a floor's own slow changes).
+  EXPECT_EQ(cv::norm(flat_floor, floor, cv::NORM_INF), 0.0);
+  // Under the glare: the local brightness is the same in the glare's centre as far from it.
+  const double centre = cv::mean(flat_lit(cv::Rect(140, 100, 40, 40)))[0];
+  const double corner = cv::mean(flat_lit(cv::Rect(10, 10, 40, 40)))[0];
+  EXPECT_NEAR(centre, corner, 10.0);  // 88 grey levels before
+  EXPECT_GT(cv::mean(lit(cv::Rect(140, 100, 40, 40)))[0] - cv::mean(lit(cv::Rect(10, 10, 40, 40)))[0], 80.0);
+  // The texture survives: the flattened glare image and the unlit floor differ only by a near-constant.
+  cv::Mat difference;
+  cv::subtract(flat_lit, floor, difference, cv::noArray(), CV_32F);
+  cv::Scalar mean, deviation;
+  cv::meanStdDev(difference(cv::Rect(40, 40, 240, 160)), mean, deviation);
+  EXPECT_LT(deviation[0], 6.0);
 }

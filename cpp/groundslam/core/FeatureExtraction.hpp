@@ -30,7 +30,7 @@ struct OrbSettings {
   /// Flattening removes the ground's own slow changes too, which tells one tile of a repeated pattern from
   /// the next: it applies only to images whose background light spans this many grey levels (a lamp's
   /// glare does; vignetting and exposure changes do not), judged over areas five times flatten_window.
-  double flatten_min_range = 40.0;
+  double flatten_min_range = 35.0;
 };
 
 /// Keypoints in pixels with their descriptors (row i describes keypoint i).
