@@ -3,9 +3,12 @@
 #include <random>
 
 #include <benchmark/benchmark.h>
+#include <opencv2/imgproc.hpp>
 
 #include "groundslam/core/FeatureExtraction.hpp"
 #include "groundslam/core/Matching.hpp"
+#include "groundslam/core/MountEstimation.hpp"
+#include "groundslam/core/StillFeatures.hpp"
 #include "groundslam/core/PoseGraph.hpp"
 #include "groundslam/core/RigidFit.hpp"
 #include "groundslam/bow/BowDatabase.hpp"
@@ -90,6 +93,52 @@ void BM_LoopVerificationMatching(benchmark::State& state) {
   state.counters["matches"] = static_cast<double>(matchNearby(b, a, estimate, 0.025, 0.7).size());
 }
 BENCHMARK(BM_LoopVerificationMatching)->Unit(benchmark::kMillisecond);
+
+void BM_IlluminationFlattening(benchmark::State& state) {
+  // state.range(0) = 1: an image with a glare patch (flattened); 0: even light (only the check runs).
+  cv::Mat image = frames().first.clone();
+  if (state.range(0) == 1) {
+    // The simulator's glare at HD: +160 grey levels at the centre, sigma 10% of the width.
+    cv::Mat glare(image.size(), CV_8U);
+    for (int row = 0; row < image.rows; ++row) {
+      for (int col = 0; col < image.cols; ++col) {
+        const double r2 = (std::pow(col - 800.0, 2) + std::pow(row - 600.0, 2)) / (160.0 * 160.0);
+        glare.at<std::uint8_t>(row, col) = cv::saturate_cast<std::uint8_t>(160.0 * std::exp(-0.5 * r2));
+      }
+    }
+    cv::add(image, glare, image);
+  }
+  const double sigma = OrbSettings{}.flatten_window * image.cols;
+  for (auto _ : state) benchmark::DoNotOptimize(flattenIllumination(image, sigma, OrbSettings{}.flatten_min_range));
+}
+BENCHMARK(BM_IlluminationFlattening)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
+
+void BM_StillSplit(benchmark::State& state) {
+  const GroundFeatures a = groundFeatures(frames().first), b = groundFeatures(frames().second);
+  const auto matches = DescriptorMatcher({0.7, "brute_force"}).match(b.descriptors, a.descriptors);
+  for (auto _ : state) benchmark::DoNotOptimize(splitStillMatches(matches, b, a, 1.5 / frames().camera.intrinsics().fx));
+  state.counters["matches"] = static_cast<double>(matches.size());
+}
+BENCHMARK(BM_StillSplit)->Unit(benchmark::kMillisecond);
+
+void BM_MountEstimation(benchmark::State& state) {
+  // One reference (the previous frame), the default 300 pairs; the pipeline uses up to three.
+  const GroundFeatures a = groundFeatures(frames().first), b = groundFeatures(frames().second);
+  const auto matches = DescriptorMatcher({0.7, "brute_force"}).match(b.descriptors, a.descriptors);
+  std::vector<Eigen::Vector2d> reference, current;
+  for (const auto& m : matches) {
+    reference.push_back(a.rays[static_cast<size_t>(m.train)]);
+    current.push_back(b.rays[static_cast<size_t>(m.query)]);
+  }
+  const Eigen::Isometry3d mount = frames().camera.T_robot_camera();
+  MountEstimationSettings settings;
+  settings.point_sigma_m = 0.35 * frames().camera.groundSampleDistance();
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(estimateMount(reference, current, mount, calibratedState(mount), frames().simulator_truth_a_b, settings));
+  }
+  state.counters["pairs"] = static_cast<double>(std::min<size_t>(reference.size(), 300));
+}
+BENCHMARK(BM_MountEstimation)->Unit(benchmark::kMillisecond);
 
 const Vocabulary& vocabulary() {
   static const Vocabulary instance = readVocabulary(GROUNDSLAM_DEFAULT_VOCABULARY);
