@@ -89,15 +89,15 @@ class Slam {
   /// The current frame's roll, pitch and height from the odometry's inliers; its points re-projected and the
   /// odometry fitted again with them. Leaves everything as it was when the estimate fails.
   void estimateMountOf(const Keyframe& previous, Keyframe& current, OdometryEdge& odometry, FrameResult& result);
-  /// Recent frames of this segment farther back than the previous one: the oldest within the mount
-  /// estimation's baseline of the current pose and the oldest within half of it, with the matches
-  /// (current = query) and motion to each.
+  /// A frame the mount is estimated against: the matches (current = query) and motion to it.
   struct MountReference {
     const Keyframe* keyframe = nullptr;
     std::vector<Match> matches;
     Pose2 T_reference_current;
   };
-  std::vector<MountReference> mountReferences(const Keyframe& current, const OdometryEdge& odometry) const;
+  /// The oldest recent frame of this segment, other than the previous one, within the mount estimation's
+  /// baseline of the current pose (empty when there is none or it does not match).
+  std::optional<MountReference> farReference(const Keyframe& current, const OdometryEdge& odometry) const;
   OdometryEdge fallbackOdometry(OdometryEdge failed) const;
   void addToGraph(const OdometryEdge& odometry);
   /// Tracking is lost: a new segment starts, tied to the last one by an edge with almost no information.

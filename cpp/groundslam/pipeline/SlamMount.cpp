@@ -1,0 +1,107 @@
+// Not in the paper: the camera's roll, pitch and height per frame (see core/MountEstimation.hpp), the part
+// of Slam that estimates them and projects the frame's keypoints with them.
+#include <algorithm>
+#include <cmath>
+
+#include "groundslam/pipeline/Slam.hpp"
+#include "groundslam/pipeline/StageTimer.hpp"
+
+namespace groundslam {
+
+std::optional<Slam::MountReference> Slam::farReference(const Keyframe& current, const OdometryEdge& odometry) const {
+  if (recent_.size() < 2) return std::nullopt;
+  const Pose2 T_world_current = graph_.poses().back() * odometry.T_prev_curr;
+  for (const Keyframe& candidate : recent_) {
+    if (&candidate == &recent_.back()) break;  // the previous frame: odometry already matched it
+    const Pose2 predicted = between(graph_.poses()[static_cast<size_t>(candidate.index)], T_world_current);
+    if (predicted.translation().norm() > mount_baseline_m_) continue;
+    const std::vector<Match> matches =
+        matchNearby(current.features, candidate.features, predicted, config_.outdoor.reference_match_radius_m, config_.matching.ratio);
+    FitSettings settings = odometry_fitting_;
+    settings.measure_ambiguity = false;
+    const RigidEstimate fit = fitMatches(matches, candidate, current, settings);
+    if (!fit.ok()) return std::nullopt;
+    MountReference reference{&candidate, {}, fit.T_target_source};
+    const double inlier2 = mount_pair_radius_m_ * mount_pair_radius_m_;
+    for (const Match& m : matches) {
+      const Eigen::Vector2d& q = current.features.points[static_cast<size_t>(m.query)];
+      if ((fit.T_target_source * q - candidate.features.points[static_cast<size_t>(m.train)]).squaredNorm() <= inlier2) {
+        reference.matches.push_back(m);
+      }
+    }
+    return reference;
+  }
+  return std::nullopt;
+}
+
+double Slam::Spread::keep(double square, double variance, int count) {
+  const double rate = 1.0 / std::min(count, 50);  // a plain mean at first, then the last 50 or so frames
+  square_mean += rate * (square - square_mean);
+  variance_mean += rate * (variance - variance_mean);
+  return square_mean > 0.0 ? std::max(0.0, square_mean - variance_mean) / square_mean : 0.0;
+}
+
+void Slam::estimateMountOf(const Keyframe& previous, Keyframe& current, OdometryEdge& odometry, FrameResult& result) {
+  if (!previous.features.hasRays() || !current.features.hasRays()) return;
+  StageTimer timer;
+  // The previous frame and, when there is one, a frame farther back: the tilt shows better over a baseline.
+  std::vector<MountReference> references;
+  if (auto far = farReference(current, odometry)) references.push_back(std::move(*far));
+  MountReference from_previous{&previous, {}, odometry.T_prev_curr};
+  const double inlier2 = mount_pair_radius_m_ * mount_pair_radius_m_;
+  for (const Match& m : odometry.used) {
+    const size_t q = static_cast<size_t>(m.query), t = static_cast<size_t>(m.train);
+    if ((odometry.T_prev_curr * current.features.points[q] - previous.features.points[t]).squaredNorm() <= inlier2) {
+      from_previous.matches.push_back(m);
+    }
+  }
+  references.push_back(std::move(from_previous));
+  std::vector<MountObservation> observations;
+  for (const MountReference& reference : references) {
+    if (!reference.keyframe->features.hasRays()) continue;
+    MountObservation o;
+    o.reference = reference.keyframe->mount;
+    o.T_guess = reference.T_reference_current;
+    for (const Match& m : reference.matches) {
+      o.reference_rays.push_back(reference.keyframe->features.rays[static_cast<size_t>(m.train)]);
+      o.current_rays.push_back(current.features.rays[static_cast<size_t>(m.query)]);
+    }
+    observations.push_back(std::move(o));
+  }
+  MountEstimationSettings settings;
+  settings.tilt_prior_rad = config_.outdoor.tilt_prior_deg * M_PI / 180.0;
+  settings.height_prior_m = config_.outdoor.height_prior_m;
+  settings.reference_sigma_rad = config_.outdoor.reference_sigma_deg * M_PI / 180.0;
+  settings.point_sigma_m = config_.outdoor.point_sigma_px * ground_sample_m_;
+  settings.max_pairs = config_.outdoor.max_pairs;
+  const MountEstimate estimate = estimateMount(observations, calibrated_mount_, settings);
+  if (!estimate.ok) return;
+  // Empirical Bayes: the estimate is shrunk toward the calibrated mount by the share of the estimates' spread
+  // that is noise (hardly shrunk on a rocking mount with a clear view, all the way on a rigid one).
+  const MountState& e = estimate.current;
+  const double calibrated_height = calibrated_mount_.translation().z();
+  ++mount_estimates_;
+  const double keep_tilt = tilt_spread_.keep(0.5 * (e.roll_rad * e.roll_rad + e.pitch_rad * e.pitch_rad),
+                                             config_.outdoor.variance_inflation * 0.5 * estimate.tilt_covariance.trace(), mount_estimates_);
+  const double keep_height = height_spread_.keep((e.height_m - calibrated_height) * (e.height_m - calibrated_height),
+                                                 config_.outdoor.variance_inflation * estimate.height_variance, mount_estimates_);
+  Keyframe reprojected = current;
+  reprojected.mount = {keep_tilt * e.roll_rad, keep_tilt * e.pitch_rad,
+                       calibrated_height + (1.0 - config_.outdoor.height_return) * keep_height * (e.height_m - calibrated_height)};
+  reprojectToGround(reprojected.features, mountFor(calibrated_mount_, reprojected.mount));
+  // The same matches, now between points projected with each frame's own mount.
+  FitSettings refit = odometry_fitting_;
+  refit.measure_ambiguity = false;
+  const RigidEstimate fit = fitMatches(odometry.used, previous, reprojected, refit);
+  result.times.fit_ms += timer.lap();
+  // A right mount brings the matched points closer together; one that does not is not used.
+  if (!fit.ok() || fit.rms_residual_m >= odometry.rms_residual_m) return;
+  current = std::move(reprojected);
+  odometry.T_prev_curr = fit.T_target_source;
+  odometry.covariance = fit.covariance;
+  odometry.inliers = fit.inliers;
+  result.inliers = fit.inliers;
+  result.mount_estimated = true;
+}
+
+}  // namespace groundslam
