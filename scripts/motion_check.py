@@ -8,6 +8,7 @@ Prints: frames whose status is ok but whose odometry motion is off by more than 
 import csv
 import json
 import math
+import os
 import sys
 
 
@@ -30,7 +31,8 @@ def between(a, b):
 def main():
     run, seq = sys.argv[1], sys.argv[2]
     truth = read_tum(seq + '/groundtruth.tum')
-    mounts = {int(r['index']): r for r in csv.DictReader(open(seq + '/mount.csv'))}
+    # mount.csv: written by simulate since the outdoor options; older sequences have none (no tilt figures).
+    mounts = {int(r['index']): r for r in csv.DictReader(open(seq + '/mount.csv'))} if os.path.exists(seq + '/mount.csv') else {}
     frames = list(csv.DictReader(open(run + '/frames.csv')))
     wrong, ok, worst_m, worst_deg = 0, 0, 0.0, 0.0
     tilt_err, height_err, tilt_level = [], [], []

@@ -20,7 +20,9 @@ cv::Mat flattenIllumination(const cv::Mat& gray_image, double sigma_px, double m
   // any resolution), brought back to full size bilinearly: smooth, no ringing.
   const double reduce = std::max(1.0, sigma_px / 4.0);
   cv::Mat small, background, flat;
-  cv::resize(gray_image, small, cv::Size(), 1.0 / reduce, 1.0 / reduce, cv::INTER_AREA);
+  const cv::Size reduced(std::max(1, static_cast<int>(std::lround(gray_image.cols / reduce))),
+                         std::max(1, static_cast<int>(std::lround(gray_image.rows / reduce))));  // never empty
+  cv::resize(gray_image, small, reduced, 0.0, 0.0, cv::INTER_AREA);
   small.convertTo(small, CV_32F);
   // Is there a patch of light much wider than any floor pattern (a lamp's glare)? Judged on a blur five
   // times wider, which leaves tiles, stains and grout lines out.

@@ -262,7 +262,9 @@ OdometryEdge Slam::estimateOdometry(const Keyframe& previous, const Keyframe& cu
     result.times.fit_ms = timer.lap();
   }
   // Without a prediction, or when the robot changed its motion more than the radius allows: brute force.
-  if (!fit.ok() || fit.inliers < config_.matching.guided_min_inlier_fraction * static_cast<double>(current.features.size())) {
+  const bool guided_fit_kept =
+      fit.ok() && fit.inliers >= config_.matching.guided_min_inlier_fraction * static_cast<double>(current.features.size());
+  if (!guided_fit_kept) {
     matches = matcher_.match(current.features.descriptors, previous.features.descriptors);
     result.times.match_ms += timer.lap();
   }
@@ -283,7 +285,8 @@ OdometryEdge Slam::estimateOdometry(const Keyframe& previous, const Keyframe& cu
     artifact_mask_.observe(current.features, split.still, split.moving);
   } else {
     used = artifact_mask_.withoutArtifacts(matches, current.features);
-    fit = fitMatches(used, previous, current, odometry_fitting_);
+    // The guided fit already used exactly these matches: not fitted twice.
+    if (!guided_fit_kept || used.size() != matches.size()) fit = fitMatches(used, previous, current, odometry_fitting_);
     if (fit.ok() && split.still.empty()) artifact_mask_.observe(current.features, {}, used);
     else artifact_mask_.fade();
   }
