@@ -107,8 +107,9 @@ void localize(const LocalizeOptions& o) {
   Progress progress("localize", static_cast<int>(dataset.frames.size()));
   for (size_t i = 0; i < dataset.frames.size() && stopSignal() == 0; ++i) {
     const DatasetFrame& frame = dataset.frames[i];
-    const PreparedFrame prepared =
-        preparer.prepare(loadGrayImage(frame.image_path, config.camera.image_width, config.camera.image_height), frame.timestamp);
+    const DecodedImage decoded = loadGrayImageForExtraction(frame.image_path, config.camera.image_width,
+                                                            config.camera.image_height, preparer.decoderReduction());
+    const PreparedFrame prepared = preparer.prepare(decoded.image, frame.timestamp, decoded.reduced_by);
     const auto start = std::chrono::steady_clock::now();
     const Localization l = localizeGlobally(map, prepared.features, config.localization, config.odometry);
     const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();

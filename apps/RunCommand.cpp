@@ -63,9 +63,11 @@ std::vector<FrameResult> processAll(const Dataset& dataset, const Config& config
   auto prepare = [&](size_t i) {
     const auto start = std::chrono::steady_clock::now();
     const DatasetFrame& frame = dataset.frames[i];
-    const cv::Mat image = loadGrayImage(frame.image_path, config.camera.image_width, config.camera.image_height);
+    const FramePreparer& preparer = preparers[i % kPrefetch];
+    const DecodedImage decoded = loadGrayImageForExtraction(frame.image_path, config.camera.image_width,
+                                                            config.camera.image_height, preparer.decoderReduction());
     const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-    return Loaded{ms, preparers[i % kPrefetch].prepare(image, frame.timestamp)};
+    return Loaded{ms, preparer.prepare(decoded.image, frame.timestamp, decoded.reduced_by)};
   };
   const size_t n = dataset.frames.size();
   std::deque<std::future<Loaded>> ahead;  // frames i, i+1, ... in order; frame j uses preparer j % kPrefetch

@@ -34,6 +34,8 @@ struct SimulateOptions {
   std::uint64_t ground_seed = 0;  ///< 0: the ground follows --seed and covers the path only
   double drop_probability = 0.0;  ///< chance per frame that the camera starts dropping frames
   int drop_max = 8;               ///< longest run of dropped frames
+  std::string image_format = "png";  ///< png (lossless) | jpg
+  int jpeg_quality = 95;
   sim::SimulationSettings settings;
 };
 
@@ -95,7 +97,8 @@ std::string describe(const sim::SimulationSettings& s, const SimulateOptions& o)
       << "\nexposure_variation: " << s.photometry.exposure_variation << "\nvignetting: " << s.photometry.vignetting
       << "\nheight_jitter_m: " << s.height_jitter_m << "\nshadow: " << s.artifacts.shadow << "\nlens_dirt: " << s.artifacts.lens_dirt
       << "\nglare: " << s.artifacts.glare << "\nbumper: " << s.artifacts.bumper << "\nspin_every: " << s.motion.spin_every << "\nspin_deg: " << s.motion.spin_deg
-      << "\ndrop_frames: " << o.drop_probability << "\ndrop_max: " << o.drop_max
+      << "\ndrop_frames: " << o.drop_probability << "\ndrop_max: " << o.drop_max << "\nimage_format: " << o.image_format
+      << "\njpeg_quality: " << o.jpeg_quality
       << "\nseed: " << s.seed << "\nground_seed: " << o.ground_seed << "\nground_size_m: " << s.ground_size_m << "\ngaps: [";
   for (size_t i = 0; i < o.gaps.size(); ++i) out << (i ? ", " : "") << "'" << o.gaps[i] << "'";
   out << "]\n";
@@ -136,9 +139,11 @@ void simulate(SimulateOptions& o) {
   for (int i = 0; i < simulator.frameCount(); ++i) {
     if (inGap(i)) continue;
     char name[32];
-    std::snprintf(name, sizeof(name), "images/%06d.png", i);
+    std::snprintf(name, sizeof(name), "images/%06d.%s", i, o.image_format.c_str());
     const std::string path = (fs::path(o.out_dir) / name).string();
-    if (!cv::imwrite(path, simulator.renderFrame(i))) throw InputError(path + ": cannot write image");
+    if (!cv::imwrite(path, simulator.renderFrame(i), {cv::IMWRITE_JPEG_QUALITY, o.jpeg_quality})) {
+      throw InputError(path + ": cannot write image");
+    }
     const Pose2& pose = simulator.groundTruth()[static_cast<size_t>(i)];
     images.push_back(name);
     homographies.push_back(mapHomographyFromRobotPose(pose, settings.camera, meters_per_pixel));
@@ -169,6 +174,10 @@ void addSimulateCommand(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand("simulate", "Render a ground-texture sequence with exact ground truth (HD Ground format)");
   cmd->add_option("OUT", o->out_dir, "Output folder")->required();
   cmd->add_option("--name", o->name, "Name of the list file (NAME.txt)")->capture_default_str();
+  cmd->add_option("--image-format", o->image_format, "Image files: png (lossless) or jpg")
+      ->check(CLI::IsMember({"png", "jpg"}))->capture_default_str();
+  cmd->add_option("--jpeg-quality", o->jpeg_quality, "JPEG quality with --image-format jpg")
+      ->check(CLI::Range(1, 100))->capture_default_str();
   cmd->add_option("--texture-kind", o->settings.texture_kind, "Procedural ground texture")
       ->check(CLI::IsMember(sim::textureKindNames()))->capture_default_str();
   cmd->add_option("--texture", o->texture_image, "Use this image as the ground instead")->check(CLI::ExistingFile);

@@ -11,11 +11,40 @@ OrbExtractor::OrbExtractor(const OrbSettings& s)
     : orb_(cv::ORB::create(s.num_features, static_cast<float>(s.scale_factor), s.num_levels, s.edge_threshold, 0, 2,
                            s.score_type == "fast" ? cv::ORB::FAST_SCORE : cv::ORB::HARRIS_SCORE, s.patch_size,
                            s.fast_threshold)),
+      max_extraction_width_(s.max_extraction_width),
       subpixel_window_(s.subpixel_window),
       flatten_window_(s.flatten_window),
       flatten_min_range_(s.flatten_min_range) {}
 
+int extractionReduction(int image_width, int max_extraction_width) {
+  if (max_extraction_width <= 0 || image_width <= max_extraction_width) return 1;
+  return (image_width + max_extraction_width - 1) / max_extraction_width;
+}
+
+int decoderReductionFor(int image_width, int max_extraction_width) {
+  const int reduction = extractionReduction(image_width, max_extraction_width);
+  for (int factor : {8, 4, 2}) {
+    if (reduction % factor == 0) return factor;
+  }
+  return 1;
+}
+
 cv::Mat flattenIllumination(const cv::Mat& gray_image, double sigma_px, double min_range) {
+  // Is there a patch of light much wider than any floor pattern (a lamp's glare)? Judged on a blur five
+  // times wider, which leaves tiles, stains and grout lines out; computed on an image reduced to four pixels
+  // per sigma of that blur, which costs little even at 320x240.
+  const double wide_sigma_px = 5.0 * sigma_px;
+  const double wide_reduce = std::max(1.0, wide_sigma_px / 4.0);
+  cv::Mat tiny, wide;
+  cv::resize(gray_image, tiny,
+             cv::Size(std::max(1, static_cast<int>(std::lround(gray_image.cols / wide_reduce))),
+                      std::max(1, static_cast<int>(std::lround(gray_image.rows / wide_reduce)))),
+             0.0, 0.0, cv::INTER_AREA);
+  tiny.convertTo(tiny, CV_32F);
+  cv::GaussianBlur(tiny, wide, cv::Size(0, 0), wide_sigma_px / wide_reduce, 0.0, cv::BORDER_REFLECT);
+  double darkest = 0.0, brightest = 0.0;
+  cv::minMaxLoc(wide, &darkest, &brightest);
+  if (brightest - darkest < min_range) return gray_image;  // even light: the image is used as it is
   // The background light: a Gaussian blur computed on an image reduced to a few pixels per sigma (cheap at
   // any resolution), brought back to full size bilinearly: smooth, no ringing.
   const double reduce = std::max(1.0, sigma_px / 4.0);
@@ -24,13 +53,6 @@ cv::Mat flattenIllumination(const cv::Mat& gray_image, double sigma_px, double m
                          std::max(1, static_cast<int>(std::lround(gray_image.rows / reduce))));  // never empty
   cv::resize(gray_image, small, reduced, 0.0, 0.0, cv::INTER_AREA);
   small.convertTo(small, CV_32F);
-  // Is there a patch of light much wider than any floor pattern (a lamp's glare)? Judged on a blur five
-  // times wider, which leaves tiles, stains and grout lines out.
-  cv::Mat wide;
-  cv::GaussianBlur(small, wide, cv::Size(0, 0), 5.0 * sigma_px / reduce, 0.0, cv::BORDER_REFLECT);
-  double darkest = 0.0, brightest = 0.0;
-  cv::minMaxLoc(wide, &darkest, &brightest);
-  if (brightest - darkest < min_range) return gray_image;  // even light: the image is used as it is
   cv::GaussianBlur(small, small, cv::Size(0, 0), sigma_px / reduce, 0.0, cv::BORDER_REFLECT);
   cv::resize(small, background, gray_image.size(), 0.0, 0.0, cv::INTER_LINEAR);
   // 128 + image - background, saturating: a smooth change of light becomes a constant grey.
@@ -40,10 +62,18 @@ cv::Mat flattenIllumination(const cv::Mat& gray_image, double sigma_px, double m
   return flat;
 }
 
-ImageFeatures OrbExtractor::detect(const cv::Mat& gray_image) const {
+ImageFeatures OrbExtractor::detect(const cv::Mat& gray_image, int reduced_by) const {
   ImageFeatures features;
-  const double sigma_px = flatten_window_ * gray_image.cols;
-  const cv::Mat image = sigma_px >= 1.0 ? flattenIllumination(gray_image, sigma_px, flatten_min_range_) : gray_image;
+  reduced_by = std::max(1, reduced_by);
+  const int reduction = std::max(reduced_by, extractionReduction(gray_image.cols * reduced_by, max_extraction_width_));
+  cv::Mat reduced = gray_image;
+  if (reduction > reduced_by) {
+    const int rest = reduction / reduced_by;
+    cv::resize(gray_image, reduced, cv::Size(std::max(1, gray_image.cols / rest), std::max(1, gray_image.rows / rest)), 0.0,
+               0.0, cv::INTER_AREA);
+  }
+  const double sigma_px = flatten_window_ * reduced.cols;
+  const cv::Mat image = sigma_px >= 1.0 ? flattenIllumination(reduced, sigma_px, flatten_min_range_) : reduced;
   orb_->detectAndCompute(image, cv::noArray(), features.keypoints, features.descriptors);
   if (subpixel_window_ > 0 && !features.keypoints.empty()) {
     // FAST positions are whole pixels of their pyramid level; refining them to the gradient-weighted
@@ -57,6 +87,14 @@ ImageFeatures OrbExtractor::detect(const cv::Mat& gray_image) const {
       if (cv::norm(corners[i] - features.keypoints[i].pt) <= static_cast<double>(subpixel_window_)) {
         features.keypoints[i].pt = corners[i];
       }
+    }
+  }
+  if (reduction > 1) {
+    // Reduced pixel i averages full-resolution pixels f*i .. f*i+f-1: its centre is f*(i+0.5)-0.5 there.
+    const float f = static_cast<float>(reduction);
+    for (auto& kp : features.keypoints) {
+      kp.pt = cv::Point2f(f * (kp.pt.x + 0.5f) - 0.5f, f * (kp.pt.y + 0.5f) - 0.5f);
+      kp.size *= f;
     }
   }
   return features;

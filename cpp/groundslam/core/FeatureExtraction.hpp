@@ -31,7 +31,18 @@ struct OrbSettings {
   /// the next: it applies only to images whose background light spans this many grey levels (a lamp's
   /// glare does; vignetting and exposure changes do not), judged over areas five times flatten_window.
   double flatten_min_range = 35.0;
+  /// Images wider than this are reduced by the smallest whole factor that brings them to this width or less
+  /// (pixel areas averaged) before ORB; keypoints come back in full-resolution pixels. HD Ground's 0.11 mm
+  /// pixels are far finer than tracking needs, and sensor noise averages out in the reduction. 0 = never.
+  int max_extraction_width = 800;
 };
+
+/// The whole factor by which `image_width` is reduced before ORB (1: not at all).
+int extractionReduction(int image_width, int max_extraction_width);
+
+/// The largest of 8, 4, 2, 1 that divides the reduction: how far a JPEG decoder may shrink such an image
+/// by itself (its scaled decoding averages pixel blocks, as the reduction does).
+int decoderReductionFor(int image_width, int max_extraction_width);
 
 /// Keypoints in pixels with their descriptors (row i describes keypoint i).
 struct ImageFeatures {
@@ -62,10 +73,13 @@ cv::Mat flattenIllumination(const cv::Mat& gray_image, double sigma_px, double m
 class OrbExtractor {
  public:
   explicit OrbExtractor(const OrbSettings& settings);
-  ImageFeatures detect(const cv::Mat& gray_image) const;
+  /// Keypoints in the pixels of the full-resolution image. `reduced_by` > 1: the image was already reduced by
+  /// that factor when decoded (it divides the extraction's own reduction).
+  ImageFeatures detect(const cv::Mat& gray_image, int reduced_by = 1) const;
 
  private:
   cv::Ptr<cv::ORB> orb_;
+  int max_extraction_width_;
   int subpixel_window_;
   double flatten_window_;
   double flatten_min_range_;

@@ -90,6 +90,43 @@ cv::Mat toEightBit(const cv::Mat& sixteen_bit) {
   return eight_bit;
 }
 
+namespace {
+
+bool isJpeg(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  unsigned char head[3] = {0, 0, 0};
+  return in.read(reinterpret_cast<char*>(head), 3) && head[0] == 0xFF && head[1] == 0xD8 && head[2] == 0xFF;
+}
+
+int reducedReadFlag(int factor) {
+  switch (factor) {
+    case 2: return cv::IMREAD_REDUCED_GRAYSCALE_2;
+    case 4: return cv::IMREAD_REDUCED_GRAYSCALE_4;
+    case 8: return cv::IMREAD_REDUCED_GRAYSCALE_8;
+    default: return 0;
+  }
+}
+
+}  // namespace
+
+DecodedImage loadGrayImageForExtraction(const std::string& path, int expected_width, int expected_height, int jpeg_reduction) {
+  const int flag = reducedReadFlag(jpeg_reduction);
+  if (flag == 0 || !isJpeg(path)) return DecodedImage{loadGrayImage(path, expected_width, expected_height), 1};
+  if (const auto size = imageSizeFromHeader(path); size && (size->width != expected_width || size->height != expected_height)) {
+    throw InputError(path + ": image is " + std::to_string(size->width) + "x" + std::to_string(size->height) +
+                     ", the camera configuration says " + std::to_string(expected_width) + "x" + std::to_string(expected_height));
+  }
+  cv::Mat image = cv::imread(path, flag);
+  if (image.empty()) throw InputError(path + ": image does not decode");
+  // The scaled decoder rounds the size up: ceil(size / factor).
+  const int width = (expected_width + jpeg_reduction - 1) / jpeg_reduction;
+  const int height = (expected_height + jpeg_reduction - 1) / jpeg_reduction;
+  if (image.depth() != CV_8U || image.cols != width || image.rows != height) {
+    return DecodedImage{loadGrayImage(path, expected_width, expected_height), 1};  // the full decoder has the last word
+  }
+  return DecodedImage{image, jpeg_reduction};
+}
+
 cv::Mat loadGrayImage(const std::string& path, int expected_width, int expected_height) {
   std::error_code error;
   if (!std::filesystem::is_regular_file(path, error)) throw InputError(path + ": image not found");

@@ -22,4 +22,15 @@ cv::Mat toEightBit(const cv::Mat& sixteen_bit);
 /// header before a large image is decoded.
 cv::Mat loadGrayImage(const std::string& path, int expected_width, int expected_height);
 
+/// An image decoded for feature extraction: `reduced_by` > 1 when the decoder shrank it by that factor itself.
+struct DecodedImage {
+  cv::Mat image;
+  int reduced_by = 1;
+};
+
+/// As loadGrayImage, but a JPEG file is decoded already reduced by `jpeg_reduction` (2, 4 or 8; 1 = full size):
+/// the decoder's scaled inverse DCT averages pixel blocks at a fraction of a full decode's cost. Other formats
+/// decode at full size (their decoders cannot skip work).
+DecodedImage loadGrayImageForExtraction(const std::string& path, int expected_width, int expected_height, int jpeg_reduction);
+
 }  // namespace groundslam

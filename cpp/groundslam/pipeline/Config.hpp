@@ -160,6 +160,7 @@ void visitConfigFields(Config_& c, Visitor&& v) {
   v("features", "subpixel_window", c.features.subpixel_window, Range{0, 15});
   v("features", "flatten_window", c.features.flatten_window, Range{0.0, 1.0});
   v("features", "flatten_min_range", c.features.flatten_min_range, Range{0.0, 255.0});
+  v("features", "max_extraction_width", c.features.max_extraction_width, Range{0, 100000});
   v("matching", "ratio", c.matching.ratio, Range{0.0, 1.0, true});
   v("matching", "method", c.matching.method, Choices{"brute_force", "lsh"});
   v("matching", "guided_odometry_radius_m", c.matching.guided_odometry_radius_m, kNonNegative);

@@ -65,12 +65,13 @@ std::optional<ConfigProblem> mountProblem(const CameraConfig& camera) {
 /// OpenCV's ORB shrinks the image scale_factor^(num_levels-1) times at its top level; below a pixel it fails.
 std::optional<ConfigProblem> pyramidProblem(const Config& config) {
   const OrbSettings& f = config.features;
-  const double smallest = std::min(config.camera.image_width, config.camera.image_height) /
+  const int reduction = extractionReduction(config.camera.image_width, f.max_extraction_width);
+  const double smallest = std::min(config.camera.image_width / reduction, config.camera.image_height / reduction) /
                           std::pow(f.scale_factor, f.num_levels - 1);
   if (smallest >= 1.0) return std::nullopt;
   std::ostringstream msg;
-  msg << f.num_levels << " levels with scale_factor " << f.scale_factor << " shrink the " << config.camera.image_width << "x"
-      << config.camera.image_height << " image below one pixel at the top level; use fewer levels or a smaller factor";
+  msg << f.num_levels << " levels with scale_factor " << f.scale_factor << " shrink the " << config.camera.image_width / reduction
+      << "x" << config.camera.image_height / reduction << " image ORB sees below one pixel at the top level; use fewer levels or a smaller factor";
   return ConfigProblem{"features.num_levels", msg.str()};
 }
 

@@ -16,14 +16,15 @@ CameraModel cameraModelFrom(const CameraConfig& c) {
 FramePreparer::FramePreparer(const Config& config)
     : camera_(cameraModelFrom(config.camera)),
       extractor_(config.features),
-      near_twin_max_distance_(config.features.near_twin_max_distance) {}
+      near_twin_max_distance_(config.features.near_twin_max_distance),
+      decoder_reduction_(decoderReductionFor(config.camera.image_width, config.features.max_extraction_width)) {}
 
-PreparedFrame FramePreparer::prepare(const cv::Mat& image, double timestamp) const {
+PreparedFrame FramePreparer::prepare(const cv::Mat& image, double timestamp, int reduced_by) const {
   // ORB keypoints and descriptors, projected to metric points on the ground plane (paper eqs. 2-4).
   StageTimer timer;
   PreparedFrame prepared;
   prepared.timestamp = timestamp;
-  const ImageFeatures image_features = extractor_.detect(image);
+  const ImageFeatures image_features = extractor_.detect(image, reduced_by);
   prepared.extract_ms = timer.lap();
   prepared.features = dropNearTwins(projectToGround(image_features, camera_), near_twin_max_distance_);
   prepared.project_ms = timer.lap();

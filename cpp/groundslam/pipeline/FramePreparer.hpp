@@ -26,12 +26,16 @@ class FramePreparer {
  public:
   explicit FramePreparer(const Config& config);
   /// One image (8-bit grey) at a time per FramePreparer; use one each for images prepared concurrently.
-  PreparedFrame prepare(const cv::Mat& image, double timestamp) const;
+  /// `reduced_by` > 1: the image was decoded already reduced by that factor (see decoderReduction()).
+  PreparedFrame prepare(const cv::Mat& image, double timestamp, int reduced_by = 1) const;
+  /// How far a JPEG decoder may reduce this camera's images before extraction (features.max_extraction_width).
+  int decoderReduction() const { return decoder_reduction_; }
 
  private:
   CameraModel camera_;
   OrbExtractor extractor_;
   int near_twin_max_distance_;
+  int decoder_reduction_;
 };
 
 }  // namespace groundslam
