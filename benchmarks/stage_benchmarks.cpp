@@ -2,7 +2,11 @@
 #include <cmath>
 #include <random>
 
+#include <map>
+#include <utility>
+
 #include <benchmark/benchmark.h>
+#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "groundslam/core/FeatureExtraction.hpp"
@@ -52,6 +56,74 @@ void BM_OrbExtraction(benchmark::State& state) {
   for (auto _ : state) benchmark::DoNotOptimize(extractor.detect(image));
 }
 BENCHMARK(BM_OrbExtraction)->Unit(benchmark::kMillisecond);
+
+// Realistic HD images (issue #14): sensor noise 2, 4 or 8 grey levels, motion blur, vignetting and mount
+// rocking, on procedural asphalt (texture 0) or on a photo of gravel (texture 1, from Debian's python3-skimage).
+constexpr const char* kPhotoTexture = "/usr/lib/python3/dist-packages/skimage/data/gravel.png";
+
+const cv::Mat& realisticFrame(int texture, int noise) {
+  static std::map<std::pair<int, int>, cv::Mat> rendered;
+  cv::Mat& frame = rendered[{texture, noise}];
+  if (!frame.empty()) return frame;
+  sim::SimulationSettings settings;
+  settings.camera = sim::scaledHdGroundIntrinsics(1600, 1200);
+  settings.path.frames = 2;
+  settings.seed = 21;
+  settings.motion_blur = 0.3;
+  settings.mount_jitter_deg = 0.3;
+  settings.photometry.vignetting = 0.3;
+  settings.photometry.noise_sigma = noise;
+  cv::Mat photo;
+  if (texture == 1) {
+    photo = cv::imread(kPhotoTexture, cv::IMREAD_GRAYSCALE);
+    if (photo.empty()) return frame;  // python3-skimage not installed: the benchmark reports it
+    settings.user_texture_width_m = 0.6;
+    settings.path.step_m = 0.004;
+  }
+  frame = sim::SequenceSimulator(settings, photo).renderFrame(1);
+  return frame;
+}
+
+/// Arguments: texture (0 asphalt, 1 gravel photo), noise, extractor (0: OpenCV's default ORB, full resolution;
+/// 1: groundslam's settings at full resolution; 2: groundslam's defaults, reduced to 800 pixels wide).
+void BM_OrbRealistic(benchmark::State& state) {
+  const cv::Mat& image = realisticFrame(static_cast<int>(state.range(0)), static_cast<int>(state.range(1)));
+  if (image.empty()) {
+    state.SkipWithError("photo texture missing: apt-get install python3-skimage");
+    return;
+  }
+  const int extractor = static_cast<int>(state.range(2));
+  OrbSettings settings;
+  if (extractor == 1) settings.max_extraction_width = 0;
+  const OrbExtractor ours(settings);
+  const cv::Ptr<cv::ORB> reference = cv::ORB::create();
+  size_t keypoints = 0;
+  for (auto _ : state) {
+    if (extractor == 0) {
+      std::vector<cv::KeyPoint> found;
+      cv::Mat descriptors;
+      reference->detectAndCompute(image, cv::noArray(), found, descriptors);
+      keypoints = found.size();
+    } else {
+      keypoints = ours.detect(image).keypoints.size();
+    }
+  }
+  state.counters["keypoints"] = static_cast<double>(keypoints);
+}
+BENCHMARK(BM_OrbRealistic)->ArgsProduct({{0, 1}, {2, 4, 8}, {0, 1, 2}})->Unit(benchmark::kMillisecond);
+
+/// Decoding one realistic HD frame (asphalt, noise 4) from memory. Arguments: 0 PNG, 1 JPEG (quality 95),
+/// 2 JPEG decoded at half size (cv::IMREAD_REDUCED_GRAYSCALE_2, what the frame preparers use for HD JPEG).
+void BM_Decode(benchmark::State& state) {
+  const cv::Mat& image = realisticFrame(0, 4);
+  const int variant = static_cast<int>(state.range(0));
+  std::vector<std::uint8_t> bytes;
+  cv::imencode(variant == 0 ? ".png" : ".jpg", image, bytes, {cv::IMWRITE_JPEG_QUALITY, 95});
+  const int flag = variant == 2 ? cv::IMREAD_REDUCED_GRAYSCALE_2 : cv::IMREAD_GRAYSCALE;
+  for (auto _ : state) benchmark::DoNotOptimize(cv::imdecode(bytes, flag));
+  state.counters["kB"] = static_cast<double>(bytes.size()) / 1024.0;
+}
+BENCHMARK(BM_Decode)->Arg(0)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond);
 
 void BM_GroundProjection(benchmark::State& state) {
   const ImageFeatures features = OrbExtractor(OrbSettings{}).detect(frames().first);

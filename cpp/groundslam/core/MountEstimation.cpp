@@ -6,6 +6,8 @@
 
 #include <ceres/ceres.h>
 
+#include "groundslam/core/NormalCovariance.hpp"
+
 namespace groundslam {
 namespace {
 
@@ -129,30 +131,15 @@ MountEstimate estimateMount(const std::vector<MountObservation>& observations, c
   ceres::Solver::Summary summary;
   ceres::Solve(options, &problem, &summary);
   if (!summary.IsSolutionUsable() || !std::isfinite(current[0] + current[1] + current[2]) || current[2] <= 0.0) return estimate;
-  // The covariance of the current state: the inverse of J^T J (robustified Jacobian at the solution, in the
-  // tangent space: 3 columns for the current state, 2 per reference, 3 per motion).
-  ceres::Problem::EvaluateOptions evaluate;
-  evaluate.parameter_blocks.push_back(current);
+  // The covariance of the current state (tangent space: 3 columns for it, 2 per reference, 3 per motion).
+  std::vector<double*> blocks = {current};
   for (size_t k = 0; k < observations.size(); ++k) {
-    evaluate.parameter_blocks.push_back(reference_states[k].data());
-    evaluate.parameter_blocks.push_back(motions[k].data());
+    blocks.push_back(reference_states[k].data());
+    blocks.push_back(motions[k].data());
   }
-  ceres::CRSMatrix jacobian;
-  if (!problem.Evaluate(evaluate, nullptr, nullptr, nullptr, &jacobian)) return estimate;
-  Eigen::MatrixXd information = Eigen::MatrixXd::Zero(jacobian.num_cols, jacobian.num_cols);
-  const auto at = [](const auto& v, int i) { return v[static_cast<size_t>(i)]; };
-  for (int row = 0; row < jacobian.num_rows; ++row) {
-    for (int a = at(jacobian.rows, row); a < at(jacobian.rows, row + 1); ++a) {
-      for (int b = at(jacobian.rows, row); b < at(jacobian.rows, row + 1); ++b) {
-        information(at(jacobian.cols, a), at(jacobian.cols, b)) += at(jacobian.values, a) * at(jacobian.values, b);
-      }
-    }
-  }
-  const Eigen::LDLT<Eigen::MatrixXd> ldlt(information);
-  if (ldlt.info() != Eigen::Success || !ldlt.isPositive()) return estimate;
-  const Eigen::Matrix3d state_covariance =
-      ldlt.solve(Eigen::MatrixXd::Identity(jacobian.num_cols, jacobian.num_cols)).topLeftCorner<3, 3>();
-  if (!state_covariance.allFinite()) return estimate;
+  const std::optional<Eigen::MatrixXd> full_covariance = normalCovariance(problem, blocks);
+  if (!full_covariance) return estimate;
+  const Eigen::Matrix3d state_covariance = full_covariance->topLeftCorner<3, 3>();
   // Ceres assumes the residuals have unit variance; scale by their observed variance.
   const double dof = std::max(1.0, 2.0 * estimate.pairs - static_cast<double>(problem.NumParameters()));
   const double residual_variance = std::max(1.0, 2.0 * summary.final_cost / dof);

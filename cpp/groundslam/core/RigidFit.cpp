@@ -8,6 +8,8 @@
 #include <Eigen/Eigenvalues>
 #include <ceres/ceres.h>
 
+#include "groundslam/core/NormalCovariance.hpp"
+
 namespace groundslam {
 namespace {
 
@@ -201,22 +203,18 @@ RigidEstimate fitRigidTransform(const std::vector<Eigen::Vector2d>& target, cons
                              loss, pose);
   }
   ceres::Solver::Options options;
-  options.linear_solver_type = ceres::DENSE_QR;
+  options.linear_solver_type = ceres::DENSE_NORMAL_CHOLESKY;  // three parameters: the normal equations are 3x3
   options.max_num_iterations = 25;
   options.num_threads = 1;
   ceres::Solver::Summary summary;
   ceres::Solve(options, &problem, &summary);
-  ceres::Covariance::Options covariance_options;
-  covariance_options.algorithm_type = ceres::DENSE_SVD;
-  ceres::Covariance covariance(covariance_options);
-  std::vector<std::pair<const double*, const double*>> blocks = {{pose, pose}};
-  if (!summary.IsSolutionUsable() || !covariance.Compute(blocks, &problem)) {
+  const std::optional<Eigen::MatrixXd> unit_covariance =
+      summary.IsSolutionUsable() ? normalCovariance(problem, {pose}) : std::nullopt;
+  if (!unit_covariance) {
     estimate.status = FitStatus::solver_failed;
     return estimate;
   }
   estimate.T_target_source = Pose2(pose[0], pose[1], pose[2]);
-  Eigen::Matrix<double, 3, 3, Eigen::RowMajor> unit_covariance;
-  covariance.GetCovarianceBlock(pose, pose, unit_covariance.data());
 
   // Ceres assumes unit residual variance; scale by the fit's own residual variance.
   inliers = inliersOf(estimate.T_target_source, target, source, settings.ransac_inlier_m);
@@ -227,7 +225,7 @@ RigidEstimate fitRigidTransform(const std::vector<Eigen::Vector2d>& target, cons
   const double dof = std::max(1.0, 2.0 * static_cast<double>(inliers.size()) - 3.0);
   estimate.inliers = static_cast<int>(inliers.size());
   estimate.rms_residual_m = std::sqrt(sum_squares / static_cast<double>(std::max<size_t>(1, inliers.size())));
-  estimate.covariance = unit_covariance * (sum_squares / dof);
+  estimate.covariance = *unit_covariance * (sum_squares / dof);
   estimate.status = inliers.size() < min_inliers ? FitStatus::too_few_inliers : FitStatus::ok;
   return estimate;
 }
