@@ -15,7 +15,7 @@ if [ ! -f "$photo" ]; then
   exit 1
 fi
 mkdir -p "$(dirname "$table")"
-echo "| texture | noise | format | reference floor ms | extraction floor ms | frames/s | ms/frame | full/reference | cm/m | heading ° | ATE mm | lost | wrong loops | peak MB |" > "$table"
+echo "| texture | noise | format | reference floor ms | extraction floor ms | frames/s | ms/frame | full/reference | cm/m | heading ° | ATE mm | not ok | wrong loops | peak MB |" > "$table"
 echo "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|" >> "$table"
 for texture in asphalt gravel; do
   for case in 2:png 4:png 8:png 4:jpg; do
@@ -46,7 +46,7 @@ rows = list(csv.DictReader(open(f"{run}/frames.csv")))
 wall = float(end) - float(start)
 ms = 1000.0 * wall / len(rows)
 m = json.load(open(f"{run}/metrics.json"))
-lost = sum(1 for r in rows if r["status"] != "ok")
+lost = sum(1 for r in rows if r["status"] not in ("ok", "first"))
 print(f"| {texture} | {noise} | {fmt} | {float(reference_ms):.1f} | {float(extraction_ms):.1f} | {len(rows) / wall:.1f} | {ms:.1f} | "
       f"{ms / float(reference_ms):.2f} | {m['translation_mae_cm_per_m']:.3f} | {m['rotation_mae_deg']:.3f} | {1000 * m['ate_rmse_m']:.2f} | {lost} | "
       f"{m['loop_closure']['wrong_accepted']} | {float(peak_kb) / 1024:.0f} |")

@@ -30,28 +30,24 @@ int decoderReductionFor(int image_width, int max_extraction_width) {
 }
 
 cv::Mat flattenIllumination(const cv::Mat& gray_image, double sigma_px, double min_range) {
+  // The background light: a Gaussian blur computed on an image reduced to a few pixels per sigma (cheap at
+  // any resolution), brought back to full size bilinearly: smooth, no ringing.
+  // A whole reduction factor over a crop of whole blocks: OpenCV's fast path for area averaging.
+  const int reduce = std::max(1, static_cast<int>(sigma_px / 4.0));
+  const cv::Size reduced(std::max(1, gray_image.cols / reduce), std::max(1, gray_image.rows / reduce));  // never empty
+  const cv::Mat whole_blocks = gray_image(cv::Rect(0, 0, std::min(gray_image.cols, reduced.width * reduce),
+                                                   std::min(gray_image.rows, reduced.height * reduce)));
+  cv::Mat small, background, flat;
+  cv::resize(whole_blocks, small, reduced, 0.0, 0.0, cv::INTER_AREA);
   // Is there a patch of light much wider than any floor pattern (a lamp's glare)? Judged on a blur five
-  // times wider, which leaves tiles, stains and grout lines out; computed on an image reduced to four pixels
-  // per sigma of that blur, which costs little even at 320x240.
-  const double wide_sigma_px = 5.0 * sigma_px;
-  const double wide_reduce = std::max(1.0, wide_sigma_px / 4.0);
+  // times wider, which leaves tiles, stains and grout lines out, computed on that image reduced five times more.
   cv::Mat tiny, wide;
-  cv::resize(gray_image, tiny,
-             cv::Size(std::max(1, static_cast<int>(std::lround(gray_image.cols / wide_reduce))),
-                      std::max(1, static_cast<int>(std::lround(gray_image.rows / wide_reduce)))),
-             0.0, 0.0, cv::INTER_AREA);
+  cv::resize(small, tiny, cv::Size(std::max(1, small.cols / 5), std::max(1, small.rows / 5)), 0.0, 0.0, cv::INTER_AREA);
   tiny.convertTo(tiny, CV_32F);
-  cv::GaussianBlur(tiny, wide, cv::Size(0, 0), wide_sigma_px / wide_reduce, 0.0, cv::BORDER_REFLECT);
+  cv::GaussianBlur(tiny, wide, cv::Size(0, 0), 5.0 * sigma_px / (reduce * 5.0), 0.0, cv::BORDER_REFLECT);
   double darkest = 0.0, brightest = 0.0;
   cv::minMaxLoc(wide, &darkest, &brightest);
   if (brightest - darkest < min_range) return gray_image;  // even light: the image is used as it is
-  // The background light: a Gaussian blur computed on an image reduced to a few pixels per sigma (cheap at
-  // any resolution), brought back to full size bilinearly: smooth, no ringing.
-  const double reduce = std::max(1.0, sigma_px / 4.0);
-  cv::Mat small, background, flat;
-  const cv::Size reduced(std::max(1, static_cast<int>(std::lround(gray_image.cols / reduce))),
-                         std::max(1, static_cast<int>(std::lround(gray_image.rows / reduce))));  // never empty
-  cv::resize(gray_image, small, reduced, 0.0, 0.0, cv::INTER_AREA);
   small.convertTo(small, CV_32F);
   cv::GaussianBlur(small, small, cv::Size(0, 0), sigma_px / reduce, 0.0, cv::BORDER_REFLECT);
   cv::resize(small, background, gray_image.size(), 0.0, 0.0, cv::INTER_LINEAR);

@@ -6,48 +6,11 @@
 
 #include <ceres/ceres.h>
 
+#include "groundslam/core/MountPairCost.hpp"
 #include "groundslam/core/NormalCovariance.hpp"
 
 namespace groundslam {
 namespace {
-
-/// Where a camera ray meets the ground for a mount state: the ray (already turned by the calibrated
-/// mount's rotation) is turned by pitch then roll and cast from the optical centre at `height`.
-template <typename T>
-void groundPoint(const Eigen::Vector3d& ray_robot, const Eigen::Vector2d& centre_xy, const T& roll, const T& pitch,
-                 const T& height, T* point) {
-  const T cp = ceres::cos(pitch), sp = ceres::sin(pitch), cr = ceres::cos(roll), sr = ceres::sin(roll);
-  const T x1 = cp * ray_robot.x() + sp * ray_robot.z();
-  const T y1 = T(ray_robot.y());
-  const T z1 = -sp * ray_robot.x() + cp * ray_robot.z();
-  const T y2 = cr * y1 - sr * z1;
-  const T z2 = sr * y1 + cr * z1;
-  const T s = -height / z2;
-  point[0] = centre_xy.x() + s * x1;
-  point[1] = centre_xy.y() + s * y2;
-}
-
-/// The misfit of one matched pair: the current ray's ground point moved by the motion, minus the
-/// reference ray's ground point, in units of the point noise.
-struct PairResidual {
-  PairResidual(const Eigen::Vector3d& reference_ray, const Eigen::Vector3d& current_ray, const Eigen::Vector2d& centre_xy,
-               double reference_height, double sigma)
-      : reference_ray_(reference_ray), current_ray_(current_ray), centre_xy_(centre_xy), reference_height_(reference_height),
-        inverse_sigma_(1.0 / sigma) {}
-  template <typename T>
-  bool operator()(const T* reference_state, const T* current, const T* motion, T* residual) const {
-    T p_ref[2], p_cur[2];
-    groundPoint(reference_ray_, centre_xy_, reference_state[0], reference_state[1], reference_state[2], p_ref);
-    groundPoint(current_ray_, centre_xy_, current[0], current[1], current[2], p_cur);
-    const T c = ceres::cos(motion[2]), s = ceres::sin(motion[2]);
-    residual[0] = (c * p_cur[0] - s * p_cur[1] + motion[0] - p_ref[0]) * inverse_sigma_;
-    residual[1] = (s * p_cur[0] + c * p_cur[1] + motion[1] - p_ref[1]) * inverse_sigma_;
-    return true;
-  }
-  Eigen::Vector3d reference_ray_, current_ray_;
-  Eigen::Vector2d centre_xy_;
-  double reference_height_, inverse_sigma_;
-};
 
 /// A Gaussian prior on the first `N` parameters of a block.
 template <int N>
@@ -107,9 +70,8 @@ MountEstimate estimateMount(const std::vector<MountObservation>& observations, c
     for (size_t i = 0; i < n; i += step) {
       const Eigen::Vector3d ref = R0 * Eigen::Vector3d(o.reference_rays[i].x(), o.reference_rays[i].y(), 1.0);
       const Eigen::Vector3d cur = R0 * Eigen::Vector3d(o.current_rays[i].x(), o.current_rays[i].y(), 1.0);
-      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<PairResidual, 2, 3, 3, 3>(
-                                   new PairResidual(ref, cur, centre_xy, o.reference.height_m, settings.point_sigma_m)),
-                               loss, reference_states[k].data(), current, motions[k].data());
+      problem.AddResidualBlock(new MountPairCost(ref, cur, centre_xy, settings.point_sigma_m), loss,
+                               reference_states[k].data(), current, motions[k].data());
       ++estimate.pairs;
     }
     if (n == 0) continue;
