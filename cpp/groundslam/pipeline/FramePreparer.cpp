@@ -16,6 +16,7 @@ CameraModel cameraModelFrom(const CameraConfig& c) {
 FramePreparer::FramePreparer(const Config& config)
     : camera_(cameraModelFrom(config.camera)),
       extractor_(config.features),
+      matcher_(config.matching),
       near_twin_max_distance_(config.features.near_twin_max_distance),
       decoder_reduction_(decoderReductionFor(config.camera.image_width, config.features.max_extraction_width)) {}
 
@@ -29,6 +30,16 @@ PreparedFrame FramePreparer::prepare(const cv::Mat& image, double timestamp, int
   prepared.features = dropNearTwins(projectToGround(image_features, camera_), near_twin_max_distance_);
   prepared.project_ms = timer.lap();
   return prepared;
+}
+
+}  // namespace groundslam
+
+namespace groundslam {
+
+void FramePreparer::matchToPrevious(PreparedFrame& frame, const cv::Mat& previous_descriptors) const {
+  StageTimer timer;
+  frame.matches_to_previous = matcher_.match(frame.features.descriptors, previous_descriptors);
+  frame.match_ms = timer.lap();
 }
 
 }  // namespace groundslam

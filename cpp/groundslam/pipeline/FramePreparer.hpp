@@ -3,10 +3,14 @@
 // ground plane. It keeps no state between images, so applications may prepare the next images on other
 // threads while the back end works on the current one.
 
+#include <optional>
+#include <vector>
+
 #include <opencv2/core.hpp>
 
 #include "groundslam/core/CameraModel.hpp"
 #include "groundslam/core/FeatureExtraction.hpp"
+#include "groundslam/core/Matching.hpp"
 #include "groundslam/pipeline/Config.hpp"
 
 namespace groundslam {
@@ -20,6 +24,11 @@ struct PreparedFrame {
   GroundFeatures features;
   double extract_ms = 0.0;
   double project_ms = 0.0;
+  /// §III-B's matching to the previous image, done ahead (FramePreparer::matchToPrevious) so that it runs on a
+  /// preparing thread instead of the back end's: only valid when the previous image is the one Slam::process
+  /// was given just before this frame. Empty: Slam matches by itself.
+  std::optional<std::vector<Match>> matches_to_previous;
+  double match_ms = 0.0;
 };
 
 class FramePreparer {
@@ -28,12 +37,15 @@ class FramePreparer {
   /// One image (8-bit grey) at a time per FramePreparer; use one each for images prepared concurrently.
   /// `reduced_by` > 1: the image was decoded already reduced by that factor (see decoderReduction()).
   PreparedFrame prepare(const cv::Mat& image, double timestamp, int reduced_by = 1) const;
+  /// Matches the frame's descriptors to the previous frame's (2-NN, ratio test), as Slam would.
+  void matchToPrevious(PreparedFrame& frame, const cv::Mat& previous_descriptors) const;
   /// How far a JPEG decoder may reduce this camera's images before extraction (features.max_extraction_width).
   int decoderReduction() const { return decoder_reduction_; }
 
  private:
   CameraModel camera_;
   OrbExtractor extractor_;
+  DescriptorMatcher matcher_;
   int near_twin_max_distance_;
   int decoder_reduction_;
 };

@@ -61,10 +61,11 @@ FrameResult Slam::process(PreparedFrame prepared) {
   result.times.project_ms = prepared.project_ms;
   timestamps_.push_back(prepared.timestamp);
   Keyframe current{frame, prepared.timestamp, std::move(prepared.features), calibratedState(calibrated_mount_)};
+  if (prepared.matches_to_previous) result.times.match_ms = prepared.match_ms;
 
   // §III-B: match to the previous image, fit T_prev_curr with a robust M-estimator (eqs. 5-6), add the edge.
   if (previous_) {
-    OdometryEdge odometry = estimateOdometry(*previous_, current, result);
+    OdometryEdge odometry = estimateOdometry(*previous_, current, prepared.matches_to_previous, result);
     if (!odometry.fallback && config_.outdoor.estimate_mount) estimateMountOf(*previous_, current, odometry, result);
     result.odometry = odometry.T_prev_curr;
     if (!odometry.fallback) last_good_odometry_ = odometry;
@@ -249,7 +250,8 @@ std::optional<RigidEstimate> Slam::fitWithoutStill(const StillSplit& split, cons
   return fit;
 }
 
-OdometryEdge Slam::estimateOdometry(const Keyframe& previous, const Keyframe& current, FrameResult& result) {
+OdometryEdge Slam::estimateOdometry(const Keyframe& previous, const Keyframe& current,
+                                    const std::optional<std::vector<Match>>& matched_ahead, FrameResult& result) {
   StageTimer timer;
   RigidEstimate fit;
   std::vector<Match> matches;
@@ -264,7 +266,9 @@ OdometryEdge Slam::estimateOdometry(const Keyframe& previous, const Keyframe& cu
   // Without a prediction, or when the robot changed its motion more than the radius allows: brute force.
   const bool guided_fit_kept =
       fit.ok() && fit.inliers >= config_.matching.guided_min_inlier_fraction * static_cast<double>(current.features.size());
-  if (!guided_fit_kept) {
+  if (!guided_fit_kept && matched_ahead) {
+    matches = *matched_ahead;  // the same brute-force matching, done on a preparing thread
+  } else if (!guided_fit_kept) {
     matches = matcher_.match(current.features.descriptors, previous.features.descriptors);
     result.times.match_ms += timer.lap();
   }

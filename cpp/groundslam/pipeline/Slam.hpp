@@ -81,7 +81,8 @@ class Slam {
   const std::vector<LoopCandidate>& loopCandidates() const { return candidates_; }
 
  private:
-  OdometryEdge estimateOdometry(const Keyframe& previous, const Keyframe& current, FrameResult& result);
+  OdometryEdge estimateOdometry(const Keyframe& previous, const Keyframe& current,
+                                const std::optional<std::vector<Match>>& matched_ahead, FrameResult& result);
   RigidEstimate fitMatches(const std::vector<Match>& matches, const Keyframe& previous, const Keyframe& current,
                            const FitSettings& settings) const;
   /// Matches split into still ones and the rest; when the rest fit a motion that moves the still ones, that fit.
