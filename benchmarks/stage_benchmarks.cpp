@@ -112,6 +112,31 @@ void BM_OrbRealistic(benchmark::State& state) {
 }
 BENCHMARK(BM_OrbRealistic)->ArgsProduct({{0, 1}, {2, 4, 8}, {0, 1, 2}})->Unit(benchmark::kMillisecond);
 
+/// ORB on a 320x240 frame (the texture matrix's size, noise 2): 0 groundslam's defaults; 1 FAST threshold 10;
+/// 2 three pyramid levels; 3 FAST scores instead of Harris; 4 no glare check; 5 OpenCV's default ORB.
+void BM_OrbSmall(benchmark::State& state) {
+  static const cv::Mat image = [] {
+    sim::SimulationSettings settings;
+    settings.path.frames = 2;
+    settings.mount_jitter_deg = 0.3;
+    return sim::SequenceSimulator(settings).renderFrame(1);
+  }();
+  OrbSettings settings;
+  const int variant = static_cast<int>(state.range(0));
+  if (variant == 1) settings.fast_threshold = 10;
+  if (variant == 2) settings.num_levels = 3;
+  if (variant == 3) settings.score_type = "fast";
+  if (variant == 4) settings.flatten_window = 0.0;
+  if (variant == 5) {
+    settings = OrbSettings{1000, 1.2, 8, 20, 31, 31, "harris", 0, 0, 0.0};
+  }
+  const OrbExtractor extractor(settings);
+  size_t keypoints = 0;
+  for (auto _ : state) keypoints = extractor.detect(image).keypoints.size();
+  state.counters["keypoints"] = static_cast<double>(keypoints);
+}
+BENCHMARK(BM_OrbSmall)->DenseRange(0, 5)->Unit(benchmark::kMillisecond);
+
 /// Decoding one realistic HD frame (asphalt, noise 4) from memory. Arguments: 0 PNG, 1 JPEG (quality 95),
 /// 2 JPEG decoded at half size (cv::IMREAD_REDUCED_GRAYSCALE_2, what the frame preparers use for HD JPEG).
 void BM_Decode(benchmark::State& state) {

@@ -192,8 +192,26 @@ RigidEstimate fitRigidTransform(const std::vector<Eigen::Vector2d>& target, cons
     return estimate;
   }
   // Robust refinement over every match near the consensus, starting from its least-squares fit.
-  const Pose2 initial = leastSquaresFit(target, source, inliers);
+  RigidEstimate refined = refineRigidTransform(target, source, leastSquaresFit(target, source, inliers), settings);
+  refined.rival_inliers = estimate.rival_inliers;
+  return refined;
+}
+
+RigidEstimate refineRigidTransform(const std::vector<Eigen::Vector2d>& target, const std::vector<Eigen::Vector2d>& source,
+                                   const Pose2& initial, const FitSettings& settings) {
+  RigidEstimate estimate;
+  const size_t min_inliers = static_cast<size_t>(std::max(3, settings.min_inliers));
+  if (target.size() != source.size() || target.size() < min_inliers) return estimate;  // too_few_matches
   const std::vector<int> refine_set = inliersOf(initial, target, source, 3.0 * settings.ransac_inlier_m);
+  if (refine_set.size() < min_inliers) {
+    estimate.status = FitStatus::too_few_inliers;
+    estimate.inliers = static_cast<int>(refine_set.size());
+    return estimate;
+  }
+  if (isDegenerate(source, refine_set, 2.0 * settings.ransac_inlier_m)) {
+    estimate.status = FitStatus::degenerate;
+    return estimate;
+  }
   double pose[3] = {initial.x, initial.y, initial.theta};
   ceres::Problem problem;
   ceres::LossFunction* loss = makeLoss(settings.loss, settings.loss_scale_m);  // shared, owned by the problem
@@ -217,7 +235,7 @@ RigidEstimate fitRigidTransform(const std::vector<Eigen::Vector2d>& target, cons
   estimate.T_target_source = Pose2(pose[0], pose[1], pose[2]);
 
   // Ceres assumes unit residual variance; scale by the fit's own residual variance.
-  inliers = inliersOf(estimate.T_target_source, target, source, settings.ransac_inlier_m);
+  const std::vector<int> inliers = inliersOf(estimate.T_target_source, target, source, settings.ransac_inlier_m);
   double sum_squares = 0.0;
   for (int i : inliers) {
     sum_squares += (estimate.T_target_source * source[static_cast<size_t>(i)] - target[static_cast<size_t>(i)]).squaredNorm();

@@ -59,4 +59,11 @@ struct RigidEstimate {
 RigidEstimate fitRigidTransform(const std::vector<Eigen::Vector2d>& target, const std::vector<Eigen::Vector2d>& source,
                                 const FitSettings& settings, const std::optional<TransformPrior>& prior = std::nullopt);
 
+/// The robust refinement alone, from a transform already known to within a few RANSAC inlier distances (a
+/// prediction, or the same matches' fit before the points were re-projected): every match within three inlier
+/// distances of `initial` enters the M-estimator. Same status, covariance and inlier count as fitRigidTransform;
+/// no rival is measured. For callers that know the answer roughly, a fraction of a full fit's cost.
+RigidEstimate refineRigidTransform(const std::vector<Eigen::Vector2d>& target, const std::vector<Eigen::Vector2d>& source,
+                                   const Pose2& initial, const FitSettings& settings);
+
 }  // namespace groundslam

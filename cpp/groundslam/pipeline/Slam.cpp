@@ -235,6 +235,12 @@ RigidEstimate Slam::fitMatches(const std::vector<Match>& matches, const Keyframe
   return fitRigidTransform(previous_points, current_points, settings);
 }
 
+RigidEstimate Slam::refineMatches(const std::vector<Match>& matches, const Keyframe& previous, const Keyframe& current,
+                                  const Pose2& initial) const {
+  const auto [previous_points, current_points] = matchedPoints(matches, current.features, previous.features);
+  return refineRigidTransform(previous_points, current_points, initial, odometry_fitting_);
+}
+
 std::optional<RigidEstimate> Slam::fitWithoutStill(const StillSplit& split, const Keyframe& previous, const Keyframe& current) const {
   if (split.still.empty() || split.moving.size() < static_cast<size_t>(config_.odometry.min_inliers)) return std::nullopt;
   RigidEstimate fit = fitMatches(split.moving, previous, current, odometry_fitting_);

@@ -83,6 +83,9 @@ class Slam {
  private:
   OdometryEdge estimateOdometry(const Keyframe& previous, const Keyframe& current,
                                 const std::optional<std::vector<Match>>& matched_ahead, FrameResult& result);
+  /// The robust refinement alone from a transform known to within a few millimetres (see refineRigidTransform).
+  RigidEstimate refineMatches(const std::vector<Match>& matches, const Keyframe& previous, const Keyframe& current,
+                              const Pose2& initial) const;
   RigidEstimate fitMatches(const std::vector<Match>& matches, const Keyframe& previous, const Keyframe& current,
                            const FitSettings& settings) const;
   /// Matches split into still ones and the rest; when the rest fit a motion that moves the still ones, that fit.

@@ -17,9 +17,9 @@ std::optional<Slam::MountReference> Slam::farReference(const Keyframe& current, 
     if (predicted.translation().norm() > mount_baseline_m_) continue;
     const std::vector<Match> matches =
         matchNearby(current.features, candidate.features, predicted, config_.outdoor.reference_match_radius_m, config_.matching.ratio);
-    FitSettings settings = odometry_fitting_;
-    settings.measure_ambiguity = false;
-    const RigidEstimate fit = fitMatches(matches, candidate, current, settings);
+    // Guided matches around the odometry's prediction, which is right to a fraction of a millimetre over so
+    // short a baseline: refined from it, no RANSAC.
+    const RigidEstimate fit = refineMatches(matches, candidate, current, predicted);
     if (!fit.ok()) return std::nullopt;
     MountReference reference{&candidate, {}, fit.T_target_source};
     const double inlier2 = mount_pair_radius_m_ * mount_pair_radius_m_;
@@ -89,10 +89,9 @@ void Slam::estimateMountOf(const Keyframe& previous, Keyframe& current, Odometry
   reprojected.mount = {keep_tilt * e.roll_rad, keep_tilt * e.pitch_rad,
                        calibrated_height + (1.0 - config_.outdoor.height_return) * keep_height * (e.height_m - calibrated_height)};
   reprojectToGround(reprojected.features, mountFor(calibrated_mount_, reprojected.mount));
-  // The same matches, now between points projected with each frame's own mount.
-  FitSettings refit = odometry_fitting_;
-  refit.measure_ambiguity = false;
-  const RigidEstimate fit = fitMatches(odometry.used, previous, reprojected, refit);
+  // The same matches, now between points projected with each frame's own mount: the motion moves by a
+  // millimetre or two at most, so the fit before re-projection starts the refinement.
+  const RigidEstimate fit = refineMatches(odometry.used, previous, reprojected, odometry.T_prev_curr);
   result.times.fit_ms += timer.lap();
   // A right mount brings the matched points closer together; one that does not is not used.
   if (!fit.ok() || fit.rms_residual_m >= odometry.rms_residual_m) return;
