@@ -37,7 +37,7 @@ demo: build
 # (unit and end-to-end tests, the CLI error tests, the report test).
 test-sanitize: deps
 	@cmake -S . -B $(SANITIZE_DIR) -DCMAKE_BUILD_TYPE=$(BUILD_TYPE) -DGROUNDSLAM_SANITIZE=$(SANITIZE) \
-		-DGROUNDSLAM_BUILD_BENCHMARKS=OFF > $(SANITIZE_DIR).configure.log 2>&1 || (cat $(SANITIZE_DIR).configure.log; exit 1)
+		-DGROUNDSLAM_BUILD_BENCHMARKS=OFF -DGROUNDSLAM_BUILD_PYTHON=OFF > $(SANITIZE_DIR).configure.log 2>&1 || (cat $(SANITIZE_DIR).configure.log; exit 1)
 	@cmake --build $(SANITIZE_DIR) -j $(JOBS)
 	@cd $(SANITIZE_DIR) && $(SANITIZER_ENV) ctest --output-on-failure -j $(JOBS)
 
@@ -48,7 +48,7 @@ fuzz-deps:
 # corpus tests/data/fuzz/<target>/; new corpus entries and findings go to $(FUZZ_WORK)/<target>/.
 fuzz: fuzz-deps
 	@cmake -S . -B $(FUZZ_DIR) -DCMAKE_BUILD_TYPE=$(BUILD_TYPE) -DCMAKE_CXX_COMPILER=clang++ -DGROUNDSLAM_FUZZ=ON \
-		-DGROUNDSLAM_BUILD_TESTS=OFF -DGROUNDSLAM_BUILD_BENCHMARKS=OFF > $(FUZZ_DIR).configure.log 2>&1 || (cat $(FUZZ_DIR).configure.log; exit 1)
+		-DGROUNDSLAM_BUILD_TESTS=OFF -DGROUNDSLAM_BUILD_BENCHMARKS=OFF -DGROUNDSLAM_BUILD_PYTHON=OFF > $(FUZZ_DIR).configure.log 2>&1 || (cat $(FUZZ_DIR).configure.log; exit 1)
 	@cmake --build $(FUZZ_DIR) -j $(JOBS) --target fuzzers
 	@bash scripts/fuzz.sh $(FUZZ_DIR) $(FUZZ_SECONDS) $(FUZZ_WORK)
 

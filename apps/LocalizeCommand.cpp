@@ -131,7 +131,7 @@ void localize(const LocalizeOptions& o) {
     std::cout << accuracySummary(rows, groundtruth);
   }
   const bool interrupted = rows.size() < dataset.frames.size();
-  writeNewFile(folder.path("run.yaml"), runStatusYaml("localize", rows.size(), dataset.frames.size(), o.dataset));
+  writeNewFile(folder.path("run.yaml"), runStatusYaml("localize", rows.size(), dataset.frames.size(), o.dataset, vocabularyPath(config)));
   const std::string where = interrupted ? folder.commitPartial() : folder.commit();
   if (o.out_dir.empty()) pointLatestAt("runs", where);
   std::cout << "results in " << where << "\n";

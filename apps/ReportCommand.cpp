@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "Commands.hpp"
+#include "groundslam/io/DataFiles.hpp"
 #include "groundslam/io/InputError.hpp"
 
 extern char** environ;
@@ -28,7 +29,7 @@ struct ReportOptions {
 void writeReport(const std::string& run_dir, const std::string& compare) {
   if (!fs::is_directory(run_dir)) throw InputError(run_dir + ": no such run folder");
   if (!fs::exists(GROUNDSLAM_PYTHON)) throw InputError(std::string(GROUNDSLAM_PYTHON) + ": Debian's python3 is missing (make deps)");
-  std::vector<std::string> args = {GROUNDSLAM_PYTHON, GROUNDSLAM_REPORT_SCRIPT, run_dir};
+  std::vector<std::string> args = {GROUNDSLAM_PYTHON, dataFilePath("python/groundslam_report.py", "python/groundslam_report.py"), run_dir};
   if (!compare.empty()) args.insert(args.end(), {"--compare", compare});
   std::vector<char*> argv;
   for (auto& a : args) argv.push_back(a.data());

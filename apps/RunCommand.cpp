@@ -1,8 +1,5 @@
 // `groundslam run DATASET`: runs SLAM on a sequence and writes the results into a run folder.
-#include <chrono>
-#include <deque>
 #include <filesystem>
-#include <future>
 #include <iostream>
 #include <memory>
 
@@ -14,6 +11,7 @@
 #include "groundslam/eval/TrajectoryMetrics.hpp"
 #include "groundslam/io/ConfigYaml.hpp"
 #include "groundslam/io/Dataset.hpp"
+#include "groundslam/io/DatasetRunner.hpp"
 #include "groundslam/io/Files.hpp"
 #include "groundslam/io/InputError.hpp"
 #include "groundslam/io/MapFile.hpp"
@@ -52,61 +50,17 @@ Config loadRunConfig(const Dataset& dataset, const RunOptions& o) {
 /// Runs the frames through the pipeline until the last one or a stop signal, with a progress line on a
 /// terminal. The next frames are decoded and their features extracted on other threads (a FramePreparer
 /// each) while the current one goes through the back end, so both cores stay busy.
+/// The library's runner, with the console's progress line and Ctrl-C.
 std::vector<FrameResult> processAll(const Dataset& dataset, const Config& config, Slam& slam, std::vector<double>& load_ms) {
-  struct Loaded {
-    double load_ms;
-    PreparedFrame frame;
-  };
-  constexpr size_t kPrefetch = 2;  // frames in preparation, one preparer each
-  std::vector<FramePreparer> preparers;  // built one by one: copies would share one OpenCV ORB object
-  for (size_t j = 0; j < kPrefetch; ++j) preparers.emplace_back(config);
-  // Frame i is matched to frame i-1 on its preparing thread as soon as i-1's descriptors exist (the back end
-  // then only fits): each task publishes its descriptors and waits for its predecessor's, which was launched
-  // first and waits for nobody later, so the chain cannot deadlock; a failed frame passes its error on.
-  auto prepare = [&](size_t i, std::shared_ptr<std::promise<cv::Mat>> descriptors, std::shared_future<cv::Mat> previous) {
-    try {
-      const auto start = std::chrono::steady_clock::now();
-      const DatasetFrame& frame = dataset.frames[i];
-      const FramePreparer& preparer = preparers[i % kPrefetch];
-      const DecodedImage decoded = loadGrayImageForExtraction(frame.image_path, config.camera.image_width,
-                                                              config.camera.image_height, preparer.decoderReduction());
-      const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-      Loaded loaded{ms, preparer.prepare(decoded.image, frame.timestamp, decoded.reduced_by)};
-      descriptors->set_value(loaded.frame.features.descriptors);
-      if (previous.valid()) preparer.matchToPrevious(loaded.frame, previous.get());
-      return loaded;
-    } catch (...) {
-      try {
-        descriptors->set_exception(std::current_exception());
-      } catch (const std::future_error&) {  // already set: the failure came after publishing
-      }
-      throw;
-    }
-  };
-  std::shared_future<cv::Mat> last_descriptors;  // of the frame launched last
-  const auto launch = [&](size_t j) {
-    auto descriptors = std::make_shared<std::promise<cv::Mat>>();
-    std::shared_future<cv::Mat> previous = last_descriptors;
-    last_descriptors = descriptors->get_future().share();
-    return std::async(std::launch::async, prepare, j, descriptors, previous);
-  };
-  const size_t n = dataset.frames.size();
-  std::deque<std::future<Loaded>> ahead;  // frames i, i+1, ... in order; frame j uses preparer j % kPrefetch
-  for (size_t j = 0; j < std::min(n, kPrefetch); ++j) ahead.push_back(launch(j));
-  std::vector<FrameResult> results;
-  Progress progress("run", static_cast<int>(n));
-  for (size_t i = 0; i < n && stopSignal() == 0; ++i) {
-    Loaded current = ahead.front().get();
-    ahead.pop_front();
-    if (i + kPrefetch < n) ahead.push_back(launch(i + kPrefetch));
-    load_ms.push_back(current.load_ms);
-    results.push_back(slam.process(std::move(current.frame)));
-    progress.update(static_cast<int>(results.size()));
-  }
-  for (auto& pending : ahead) pending.wait();  // frames prepared ahead of a stop are dropped
-  slam.finish();
+  Progress progress("run", static_cast<int>(dataset.frames.size()));
+  int done = 0;
+  RunnerCallbacks callbacks;
+  callbacks.on_frame = [&](const FrameResult&) { progress.update(++done); };
+  callbacks.should_stop = [] { return stopSignal() != 0; };
+  RunnerOutput output = runDataset(dataset, config, slam, callbacks);
   progress.finish();
-  return results;
+  load_ms = std::move(output.load_ms);
+  return std::move(output.results);
 }
 
 /// Runs SLAM on the dataset and writes every result file into `folder`, a fresh folder of this run's own.
@@ -148,7 +102,8 @@ RunProgress runInto(const std::string& folder, const RunOptions& o, const Datase
   }
   writeNewFile(file("candidates.csv"), formatCandidatesCsv(slam.loopCandidates(), truths));
   writeNewFile(file("trajectory.tum"), formatTum(trajectory));
-  writeNewFile(file("run.yaml"), runStatusYaml("run", progress.processed, progress.total, o.dataset));  // last: its status says whether the run finished
+  writeNewFile(file("run.yaml"), runStatusYaml("run", progress.processed, progress.total, o.dataset,
+                                                  config.loop_closure.enabled ? vocabularyPath(config) : ""));  // last: its status says whether the run finished
   return progress;
 }
 

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "groundslam/io/DataFiles.hpp"
 #include "groundslam/io/InputError.hpp"
 #include "groundslam/io/VocabularyFile.hpp"
 
@@ -57,17 +58,16 @@ std::shared_ptr<const Vocabulary> loadVocabulary(const Config& config) {
   }
 }
 
-std::string runStatusYaml(const std::string& what, size_t processed, size_t total, const std::string& dataset) {
-  std::string quoted = "'";  // YAML single-quoted: quotes doubled
-  for (char c : dataset) quoted += c == '\'' ? std::string("''") : std::string(1, c);
+std::string runStatusYaml(const std::string& what, size_t processed, size_t total, const std::string& dataset,
+                          const std::string& vocabulary) {
+  const auto quoted = [](const std::string& text) {  // YAML single-quoted: quotes doubled
+    std::string q = "'";
+    for (char c : text) q += c == '\'' ? std::string("''") : std::string(1, c);
+    return q + "'";
+  };
   return "# groundslam " + what + " folder\nstatus: " + (processed < total ? "interrupted" : "complete") +
          "\nframes_processed: " + std::to_string(processed) + "\nframes_total: " + std::to_string(total) +
-         "\ndataset: " + quoted + "'\n";
-}
-
-std::string defaultVocabularyPath() {
-  // The copy in the source tree (config/vocabulary/), fixed at build time.
-  return GROUNDSLAM_DEFAULT_VOCABULARY;
+         "\ndataset: " + quoted(dataset) + "\nvocabulary: " + (vocabulary.empty() ? "null" : quoted(vocabulary)) + "\n";
 }
 
 int countStatus(const std::vector<FrameResult>& results, const std::string& prefix) {

@@ -19,13 +19,13 @@ int countStatus(const std::vector<FrameResult>& results, const std::string& pref
 int countLoopClosures(const std::vector<FrameResult>& results);
 /// `metrics.json`: the trajectory metrics with the loop-closure metrics under "loop_closure".
 std::string runMetricsJson(const TrajectoryMetrics& trajectory, const LoopClosureMetrics& loops);
-/// The path of the vocabulary shipped with groundslam.
-std::string defaultVocabularyPath();
 /// The vocabulary a configuration names (`loop_closure.vocabulary`), or the shipped one.
 std::string vocabularyPath(const Config& config);
 /// Reads that vocabulary; errors name the key. Throws InputError.
 std::shared_ptr<const Vocabulary> loadVocabulary(const Config& config);
 /// `run.yaml` of a run folder: `status: complete` or `interrupted`, frames processed and in the dataset.
-std::string runStatusYaml(const std::string& what, size_t processed, size_t total, const std::string& dataset);
+/// `run.yaml`: whether the run finished, the dataset and the vocabulary file used (empty: none).
+std::string runStatusYaml(const std::string& what, size_t processed, size_t total, const std::string& dataset,
+                          const std::string& vocabulary);
 
 }  // namespace groundslam::apps

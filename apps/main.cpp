@@ -1,6 +1,7 @@
 // groundslam: SLAM for robots with a downward-looking camera (Hart et al., ICRA 2023).
 #include <exception>
 #include <iostream>
+#include <string>
 
 #include <CLI/CLI.hpp>
 #include <opencv2/core.hpp>
@@ -11,6 +12,7 @@
 
 int main(int argc, char** argv) {
   CLI::App app{"groundslam: monocular SLAM on ground textures"};
+  app.set_version_flag("--version", std::string("groundslam ") + GROUNDSLAM_VERSION);
   app.require_subcommand(1);
   groundslam::apps::addSimulateCommand(app);
   groundslam::apps::addRunCommand(app);

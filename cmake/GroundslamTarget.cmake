@@ -10,13 +10,20 @@ function(groundslam_set_warnings target)
   endif()
 endfunction()
 
-# groundslam_add_library(NAME SOURCES a.cpp ... DEPS lib ...)
+# groundslam_add_library(NAME SOURCES a.cpp ... DEPS lib ...): a static library of the installed package,
+# `groundslam_<part>` in this build and `groundslam::<part>` for users (alias here, exported name when installed).
+# Headers come from cpp/ in the build tree and from include/ under the install prefix.
+set(GROUNDSLAM_LIBRARIES "" CACHE INTERNAL "the package's libraries")
 function(groundslam_add_library name)
   cmake_parse_arguments(ARG "" "" "SOURCES;DEPS" ${ARGN})
   add_library(${name} STATIC ${ARG_SOURCES})
-  target_include_directories(${name} PUBLIC ${PROJECT_SOURCE_DIR}/cpp)
+  string(REPLACE "groundslam_" "" part ${name})
+  add_library(groundslam::${part} ALIAS ${name})
+  set_target_properties(${name} PROPERTIES EXPORT_NAME ${part} POSITION_INDEPENDENT_CODE ON)
+  target_include_directories(${name} PUBLIC $<BUILD_INTERFACE:${PROJECT_SOURCE_DIR}/cpp> $<INSTALL_INTERFACE:include>)
   target_link_libraries(${name} PUBLIC ${ARG_DEPS})
   groundslam_set_warnings(${name})
+  set(GROUNDSLAM_LIBRARIES ${GROUNDSLAM_LIBRARIES} ${name} CACHE INTERNAL "the package's libraries")
 endfunction()
 
 # Sanitizer build (`make test-sanitize`): -DGROUNDSLAM_SANITIZE=address,undefined instruments every target.

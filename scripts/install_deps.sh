@@ -3,17 +3,21 @@
 # when every package is present, so `make build` stays fast after the first time.
 #   scripts/install_deps.sh          what `make build`, `make test` and `make demo` need
 #   scripts/install_deps.sh --fuzz   also clang and its libFuzzer runtime, for `make fuzz`
+#   scripts/install_deps.sh --benchmarks   also python3-skimage (its photo of gravel is a benchmark texture)
 set -euo pipefail
 
 packages=(
   cmake make g++ pkg-config
   libopencv-dev libceres-dev libeigen3-dev libyaml-cpp-dev libcli11-dev
   libgtest-dev libgmock-dev libbenchmark-dev
-  python3 python3-numpy python3-matplotlib
+  python3 python3-numpy python3-matplotlib python3-dev pybind11-dev python3-pytest
   chromium fonts-dejavu-core
 )
 if [ "${1:-}" = "--fuzz" ]; then
   packages+=(clang libclang-rt-14-dev)
+fi
+if [ "${1:-}" = "--benchmarks" ]; then
+  packages+=(python3-skimage)
 fi
 
 missing=()

@@ -1,0 +1,22 @@
+#pragma once
+// The data files groundslam ships (the default vocabulary, the default configuration, the report script),
+// found wherever the program runs: in an install prefix, in the source tree it was built from, or where the
+// user says.
+
+#include <string>
+#include <vector>
+
+namespace groundslam {
+
+/// Where a shipped data file is looked for, in order: $GROUNDSLAM_DATA_DIR/<installed>; <dir of the running
+/// executable>/../share/groundslam/<installed>; <install prefix>/share/groundslam/<installed>; <source
+/// tree>/<in_source>.
+std::vector<std::string> dataFileCandidates(const std::string& installed, const std::string& in_source);
+
+/// The first candidate that exists; when none does, the first candidate (whose reader then names it).
+std::string dataFilePath(const std::string& installed, const std::string& in_source);
+
+/// The shipped vocabulary (`loop_closure.vocabulary` when that key is empty).
+std::string defaultVocabularyPath();
+
+}  // namespace groundslam
