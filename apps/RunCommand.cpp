@@ -82,6 +82,7 @@ RunProgress runInto(const std::string& folder, const RunOptions& o, const Datase
   writeNewFile(file("graph.g2o"), formatG2o(slam.graph()));
   if (slam.featureMap()) writeNewFile(file("map.gsmap"), formatMap(*slam.featureMap(), slam.mapSegment()));
   const auto measured = std::count_if(trajectory.begin(), trajectory.end(), [](const StampedPose& p) { return p.measured; });
+  std::cout << "timestamps from " << dataset.timestamps_from << "\n";
   std::cout << "processed " << results.size() << " of " << dataset.frames.size() << " frames: " << measured << " measured, "
             << countStatus(results, "fallback") << " with fallback odometry (pose assumed from earlier motion), "
             << countStatus(results, "lost") << " lost (tracking lost, not yet relocalized), " << countStatus(results, "relocalized")

@@ -19,7 +19,7 @@ std::string formatFramesCsv(const std::vector<FrameResult>& results, const std::
     const FrameResult& r = results[i];
     const StageTimes& t = r.times;
     std::snprintf(row, sizeof(row),
-                  "%d,%.9g,%d,%d,%d,%s,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.7f,%.7f,%.5f,%d,%d,%.4f,%.4f,%.6f,%d\n", r.index,
+                  "%d,%.9f,%d,%d,%d,%s,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.7f,%.7f,%.5f,%d,%d,%.4f,%.4f,%.6f,%d\n", r.index,
                   r.timestamp, r.keypoints, r.matches, r.inliers, r.status.c_str(), load_ms[i], t.extract_ms, t.project_ms,
                   t.match_ms, t.fit_ms, t.loop_ms, t.optimise_ms, load_ms[i] + t.total_ms, r.odometry.x, r.odometry.y,
                   r.odometry.theta * 180.0 / M_PI, r.still_matches, r.artifact_cells, r.mount.roll_rad * 180.0 / M_PI,

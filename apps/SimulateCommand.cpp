@@ -118,6 +118,8 @@ void simulate(SimulateOptions& o) {
   if (fs::exists(o.out_dir, error) && !fs::is_empty(o.out_dir, error) && !fs::exists(fs::path(o.out_dir) / "simulation.yaml", error)) {
     throw InputError(o.out_dir + ": the folder exists and holds no earlier simulation; choose a new or empty folder");
   }
+  // An earlier simulation's images go: a longer earlier run would leave frames that are not in this list.
+  if (fs::exists(fs::path(o.out_dir) / "simulation.yaml", error)) fs::remove_all(fs::path(o.out_dir) / "images", error);
   fs::create_directories(fs::path(o.out_dir) / "images");
 
   Config config;
@@ -158,6 +160,11 @@ void simulate(SimulateOptions& o) {
   progress.finish();
   writeFileAtomically((fs::path(o.out_dir) / "camera.yaml").string(), configToYaml(config, {"camera", "dataset"}));
   writeTum((fs::path(o.out_dir) / "groundtruth.tum").string(), groundtruth);
+  // The frames' times, as groundtruth.tum has them (list indices): a dataset's timestamps.txt wins over
+  // numeric file names, which after dropped frames or gaps would skip numbers.
+  std::string times;
+  for (const StampedPose& pose : groundtruth) times += std::to_string(static_cast<long long>(pose.timestamp)) + "\n";
+  writeFileAtomically((fs::path(o.out_dir) / "timestamps.txt").string(), times);
   writeFileAtomically((fs::path(o.out_dir) / "mount.csv").string(), mount_csv.str());
   writeFileAtomically((fs::path(o.out_dir) / "simulation.yaml").string(), describe(settings, o));
   // The list goes last: a sequence without its list is visibly incomplete.

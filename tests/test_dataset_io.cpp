@@ -134,3 +134,34 @@ TEST(Tum, WritesTheConventionsFormatAndReadsItBack) {
   writeText(dir / "bad.tum", "0 1 2 0 0 0 0 1\n1 1 2 0 0 0 1\n");
   EXPECT_NE(inputErrorOf([&] { readTum((dir / "bad.tum").string()); }).find("bad.tum:2: expected 8 numbers"), std::string::npos);
 }
+
+TEST(Timestamps, FromNumericFileNamesIntoTheTrajectory) {
+  const auto dir = scratchDir();
+  for (const char* name : {"1700000000.133.png", "1700000000.2.png", "1700000001.png"}) writeImage(dir / name);
+  const Dataset dataset = openDataset(dir.string());
+  EXPECT_EQ(dataset.timestamps_from, "file names");
+  ASSERT_EQ(dataset.frames.size(), 3u);
+  EXPECT_DOUBLE_EQ(dataset.frames[0].timestamp, 1700000000.133);
+  EXPECT_DOUBLE_EQ(dataset.frames[1].timestamp, 1700000000.2);
+  EXPECT_DOUBLE_EQ(dataset.frames[2].timestamp, 1700000001.0);
+  // TUM keeps them to the nanosecond (evo pairs trajectories by time): 1700000000.132999897, the double nearest.
+  const std::string tum = formatTum({{dataset.frames[0].timestamp, Pose2()}});
+  EXPECT_NEAR(std::stod(tum.substr(0, tum.find(' '))), 1700000000.133, 1e-6);
+}
+
+TEST(Timestamps, TimestampsFileWinsAndIsChecked) {
+  const auto dir = scratchDir();
+  for (const char* name : {"a.png", "b.png", "c.png"}) writeImage(dir / name);
+  EXPECT_EQ(openDataset(dir.string()).timestamps_from, "index");  // names that are not numbers: the index
+  writeText(dir / "timestamps.txt", "# seconds\n12.5\n12.75\n\n13.0\n");
+  const Dataset dataset = openDataset(dir.string());
+  EXPECT_EQ(dataset.timestamps_from, (dir / "timestamps.txt").string());
+  EXPECT_DOUBLE_EQ(dataset.frames[1].timestamp, 12.75);
+  EXPECT_DOUBLE_EQ(dataset.frames[2].timestamp, 13.0);
+  writeText(dir / "timestamps.txt", "12.5\n12.75\n");
+  EXPECT_NE(inputErrorOf([&] { openDataset(dir.string()); }).find("timestamps.txt: 2 timestamps for 3 images"), std::string::npos);
+  writeText(dir / "timestamps.txt", "12.5\n12.75\n12.75\n");
+  EXPECT_NE(inputErrorOf([&] { openDataset(dir.string()); }).find("timestamps.txt:3: timestamps must increase"), std::string::npos);
+  writeText(dir / "timestamps.txt", "12.5\n12.75 1\n13\n");
+  EXPECT_NE(inputErrorOf([&] { openDataset(dir.string()); }).find("timestamps.txt:2: expected one timestamp"), std::string::npos);
+}

@@ -1,6 +1,9 @@
 #include "groundslam/io/Dataset.hpp"
 
 #include <algorithm>
+#include <cctype>
+#include <cstdlib>
+#include <optional>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -31,6 +34,16 @@ std::optional<std::string> cameraYamlIn(const fs::path& folder) {
   return std::nullopt;
 }
 
+/// The number a file name stands for ("1700000000.133.png" -> 1700000000.133), if it is one.
+std::optional<double> numericName(const std::string& path) {
+  const std::string stem = fs::path(path).stem().string();
+  if (stem.empty() || !(std::isdigit(static_cast<unsigned char>(stem.front())) || stem.front() == '.')) return std::nullopt;
+  char* end = nullptr;
+  const double value = std::strtod(stem.c_str(), &end);
+  if (end != stem.c_str() + stem.size() || !std::isfinite(value)) return std::nullopt;
+  return value;
+}
+
 Dataset openImageFolder(const fs::path& folder) {
   std::vector<std::string> names;
   for (const auto& entry : fs::directory_iterator(folder)) {
@@ -38,6 +51,11 @@ Dataset openImageFolder(const fs::path& folder) {
   }
   if (names.empty()) throw InputError(folder.string() + ": folder contains no images (png, jpg, bmp, tif, pgm)");
   std::sort(names.begin(), names.end(), naturalLess);
+  // Names that are all numbers (times: 1700000000.133.png) go in numeric order, which natural order is not
+  // for decimals (".2" would come before ".133").
+  if (std::all_of(names.begin(), names.end(), [](const std::string& n) { return numericName(n).has_value(); })) {
+    std::stable_sort(names.begin(), names.end(), [](const std::string& a, const std::string& b) { return *numericName(a) < *numericName(b); });
+  }
   Dataset dataset;
   dataset.source = folder.string();
   dataset.camera_yaml = cameraYamlIn(folder);
@@ -102,6 +120,48 @@ Dataset openHdGroundList(const fs::path& list, bool with_poses) {
   return dataset;
 }
 
+/// Real timestamps when the dataset has them: timestamps.txt (beside the list or folder, else in the images'
+/// folder), else numeric file names; the frame index otherwise.
+void assignTimestamps(Dataset& dataset, const fs::path& folder) {
+  std::vector<fs::path> candidates = {folder / "timestamps.txt"};
+  if (!dataset.frames.empty()) {
+    const fs::path images = fs::path(dataset.frames.front().image_path).parent_path() / "timestamps.txt";
+    if (images != candidates.front()) candidates.push_back(images);
+  }
+  for (const fs::path& candidate : candidates) {
+    std::error_code error;
+    if (!fs::is_regular_file(candidate, error)) continue;
+    const std::string file = candidate.string();
+    std::istringstream in(readTextFile(file));
+    std::vector<double> times;
+    std::string line;
+    for (int number = 1; std::getline(in, line); ++number) {
+      const auto first = line.find_first_not_of(" \t\r");
+      if (first == std::string::npos || line[first] == '#') continue;
+      const std::vector<double> values = parseNumbers(line, file, number);
+      if (values.size() != 1) throw InputError(lineRef(file, number) + ": expected one timestamp in seconds, got " + std::to_string(values.size()) + " numbers");
+      if (!times.empty() && !(values[0] > times.back())) {
+        throw InputError(lineRef(file, number) + ": timestamps must increase (" + std::to_string(values[0]) + " after " + std::to_string(times.back()) + ")");
+      }
+      times.push_back(values[0]);
+    }
+    if (times.size() != dataset.frames.size()) {
+      throw InputError(file + ": " + std::to_string(times.size()) + " timestamps for " + std::to_string(dataset.frames.size()) + " images (one per image, in order)");
+    }
+    for (size_t i = 0; i < times.size(); ++i) dataset.frames[i].timestamp = times[i];
+    dataset.timestamps_from = file;
+    return;
+  }
+  std::vector<double> named;
+  for (const DatasetFrame& frame : dataset.frames) {
+    const auto value = numericName(frame.image_path);
+    if (!value || (!named.empty() && !(*value > named.back()))) return;  // the index, as before
+    named.push_back(*value);
+  }
+  for (size_t i = 0; i < named.size(); ++i) dataset.frames[i].timestamp = named[i];
+  dataset.timestamps_from = "file names";
+}
+
 }  // namespace
 
 std::vector<HdGroundListEntry> parseHdGroundList(const std::string& text, const std::string& file, bool with_poses) {
@@ -142,11 +202,18 @@ bool Dataset::hasGroundTruth() const {
 Dataset openDataset(const std::string& path) {
   const fs::path p(path);
   if (!fs::exists(p)) throw InputError(path + ": no such file or folder");
-  if (fs::is_directory(p)) return openImageFolder(p);
+  Dataset dataset;
   const std::string ext = p.extension().string();
-  if (ext == ".txt") return openHdGroundList(p, true);
-  if (ext == ".test") return openHdGroundList(p, false);
-  throw InputError(path + ": not a dataset: expected an HD Ground list (.txt, .test) or an image folder");
+  if (fs::is_directory(p)) {
+    dataset = openImageFolder(p);
+    assignTimestamps(dataset, p);
+  } else if (ext == ".txt" || ext == ".test") {
+    dataset = openHdGroundList(p, ext == ".txt");
+    assignTimestamps(dataset, p.parent_path());
+  } else {
+    throw InputError(path + ": not a dataset: expected an HD Ground list (.txt, .test) or an image folder");
+  }
+  return dataset;
 }
 
 Pose2 robotPoseFromMapHomography(const Eigen::Matrix3d& A, double cx, double cy, double meters_per_pixel) {

@@ -19,7 +19,7 @@ namespace groundslam {
 
 struct DatasetFrame {
   std::string image_path;                         ///< usable path (list-relative paths resolved)
-  double timestamp = 0.0;                         ///< the frame index: HD Ground has no times
+  double timestamp = 0.0;                         ///< seconds (see Dataset::timestamps_from), else the frame index
   std::optional<Eigen::Matrix3d> map_from_image;  ///< HD Ground's A: image pixel -> map pixel
   bool pose_reliable = true;                      ///< false for a `* ` pose line
 };
@@ -28,6 +28,10 @@ struct Dataset {
   std::string source;                      ///< the list file or folder that was opened
   std::vector<DatasetFrame> frames;
   std::optional<std::string> camera_yaml;  ///< `camera.yaml` beside the list or in the folder
+  /// Where the frames' timestamps come from: a `timestamps.txt` (its path; one time in seconds per image, in
+  /// order, beside the list or in the images' folder), "file names" (every image named by a number, e.g.
+  /// 1700000000.133.png, increasing), or "index" (0, 1, 2, ...).
+  std::string timestamps_from = "index";
   bool hasGroundTruth() const;
 };
 
