@@ -144,7 +144,7 @@ void addLocalizeCommand(CLI::App& app) {
   auto o = std::make_shared<LocalizeOptions>();
   CLI::App* cmd = app.add_subcommand("localize", "Localize every image of a dataset on a map of an earlier run, each on its own");
   cmd->add_option("MAP", o->map, "Map file (map.gsmap written by groundslam run)")->required()->check(CLI::ExistingFile);
-  cmd->add_option("DATASET", o->dataset, "HD Ground list (.txt/.test) or image folder")->required();
+  cmd->add_option("DATASET", o->dataset, "HD Ground list (.txt/.test), a .txt list of image paths, or an image folder")->required();
   cmd->add_option("--config", o->config, "Configuration YAML, applied over camera.yaml beside the dataset");
   cmd->add_option("--out", o->out_dir, "Folder for localizations.csv and localized.tum (default: a new folder runs/YYYYmmdd_HHMMSS)");
   cmd->callback([o]() { localize(*o); });

@@ -32,6 +32,7 @@ struct RunOptions {
   std::string map;      ///< a prior map (map.gsmap of an earlier run): the session localizes and tracks on it
   bool no_loop_closure = false;
   bool report = false;
+  long long start = 0, stop = -1, every = 1;  ///< frames start, start + every, ... before stop (-1: the end)
 };
 
 /// How far a run got: every frame, or the frames before a stop signal.
@@ -116,7 +117,8 @@ std::vector<std::string> runInputs(const RunOptions& o, const Dataset& dataset, 
 }
 
 void run(const RunOptions& o) {
-  const Dataset dataset = openDataset(o.dataset);
+  Dataset dataset = openDataset(o.dataset);
+  selectFrames(dataset, o.start, o.stop, o.every);
   const Config config = loadRunConfig(dataset, o);
   const std::string target = o.out_dir.empty() ? newRunFolderName("runs") : o.out_dir;
   RunFolder folder(target, runInputs(o, dataset, config));
@@ -157,7 +159,7 @@ void run(const RunOptions& o) {
 void addRunCommand(CLI::App& app) {
   auto o = std::make_shared<RunOptions>();
   CLI::App* cmd = app.add_subcommand("run", "Run SLAM on an HD Ground list or an image folder");
-  cmd->add_option("DATASET", o->dataset, "HD Ground list (.txt/.test) or image folder")->required();
+  cmd->add_option("DATASET", o->dataset, "HD Ground list (.txt/.test), a .txt list of image paths, or an image folder")->required();
   cmd->add_option("--config", o->config, "Configuration YAML, applied over camera.yaml beside the dataset");
   cmd->add_option("--out", o->out_dir,
                   "Run folder for the results; replaced only when the run succeeds, refused when it holds other files "
@@ -166,6 +168,9 @@ void addRunCommand(CLI::App& app) {
                                     "poses come out in its frame and DIR/map.gsmap is the merged map")
       ->check(CLI::ExistingFile);
   cmd->add_flag("--no-loop-closure", o->no_loop_closure, "Odometry only (sets loop_closure.enabled = false)");
+  cmd->add_option("--start", o->start, "First frame (index in the dataset)")->capture_default_str();
+  cmd->add_option("--stop", o->stop, "Stop before this frame (-1: the last frame)")->capture_default_str();
+  cmd->add_option("--every", o->every, "Every Nth frame from --start")->capture_default_str();
   cmd->add_flag("--report", o->report, "Also run odometry only into DIR/odometry and write DIR/report.html");
   cmd->callback([o]() { run(*o); });
 }

@@ -197,9 +197,9 @@ void addSimulateCommand(CLI::App& app) {
       ->check(CLI::Range(0.0, 90.0))->capture_default_str();
   cmd->add_option("--laps", o->settings.path.laps, "Loop: times around")->check(CLI::Range(1, 1000))->capture_default_str();
   cmd->add_option("--lane-length-m", o->settings.path.lane_length_m, "Lawnmower: lane length")->check(CLI::PositiveNumber)->capture_default_str();
+  o->settings.path.lane_spacing_m = 0.0;  // automatic unless given (the help shows 0)
   cmd->add_option("--lane-spacing-m", o->settings.path.lane_spacing_m, "Lawnmower: lane spacing (0: 60% of the footprint)")
       ->capture_default_str();
-  o->settings.path.lane_spacing_m = 0.0;
   cmd->add_option("--area-m", o->settings.path.area_m, "Random walk: side of the area")->check(CLI::PositiveNumber)->capture_default_str();
   cmd->add_option("--resolution", o->resolution, "Image size WIDTHxHEIGHT (1600x1200 for HD Ground-like data)")->capture_default_str();
   cmd->add_option("--fx", o->fx, "Focal length x, pixels (default: HD Ground's, scaled)");

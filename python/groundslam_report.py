@@ -50,6 +50,10 @@ def read_tum(path):
     return a[:, 0], a[:, 1], a[:, 2], theta
 
 
+# candidates.csv leaves these empty for candidates rejected before the fit.
+EMPTY_WHEN_NOT_FITTED = ("covariance_score", "x", "y", "theta", "ambiguity")
+
+
 def read_csv(path, required):
     if not os.path.exists(path):
         raise ReportError(f"{path}: no such file")
@@ -64,6 +68,8 @@ def read_csv(path, required):
             value = row[column]
             if column in ("status", "rejected_by"):
                 continue
+            if value == "" and column in EMPTY_WHEN_NOT_FITTED:
+                continue
             try:
                 float(value)
             except ValueError:
@@ -72,7 +78,7 @@ def read_csv(path, required):
 
 
 def column(rows, name):
-    return np.array([float(r[name]) for r in rows]) if rows else np.zeros(0)
+    return np.array([float(r[name]) if r[name] != "" else np.nan for r in rows]) if rows else np.zeros(0)
 
 
 def read_metrics(path):

@@ -86,8 +86,16 @@ TEST(HdGround, MalformedListsAreNamedWithTheirLine) {
   m = inputErrorOf([&] { openDataset((dir / "missing.txt").string()); });
   EXPECT_NE(m.find("missing.txt:3"), std::string::npos) << m;
   EXPECT_NE(m.find("nothere.png"), std::string::npos) << m;
-  writeText(dir / "dangling.txt", "a.png\n");
-  EXPECT_NE(inputErrorOf([&] { openDataset((dir / "dangling.txt").string()); }).find("without a pose"), std::string::npos);
+  writeText(dir / "dangling.txt", "a.png\n1 0 0 0 1 0 0 0 1\na.png\n");
+  EXPECT_NE(inputErrorOf([&] { openDataset((dir / "dangling.txt").string()); }).find("dangling.txt:3: image without a pose"),
+            std::string::npos);
+  // Only image paths: a plain list of images, no ground truth.
+  writeImage(dir / "b.png");
+  writeText(dir / "plain.txt", "a.png\nb.png\n\na.png\n");
+  const Dataset plain = openDataset((dir / "plain.txt").string());
+  ASSERT_EQ(plain.frames.size(), 3u);
+  EXPECT_EQ(std::filesystem::path(plain.frames[1].image_path).filename(), "b.png");
+  EXPECT_FALSE(plain.hasGroundTruth());
   EXPECT_NE(inputErrorOf([&] { openDataset((dir / "nope.txt").string()); }).find("nope.txt"), std::string::npos);
 }
 

@@ -101,12 +101,28 @@ std::optional<std::string> unreliablePoseText(const std::string& text) {
   return text.substr(2);
 }
 
+/// A `.txt` whose every line names an image file: a plain list of images (no HD Ground poses).
+bool isPlainImageList(const std::string& text) {
+  std::istringstream in(text);
+  std::string line;
+  bool any = false;
+  while (std::getline(in, line)) {
+    const std::string entry = trim(line);
+    if (entry.empty()) continue;
+    if (!isImageFile(fs::path(entry))) return false;
+    any = true;
+  }
+  return any;
+}
+
 Dataset openHdGroundList(const fs::path& list, bool with_poses) {
   const std::string file = list.string();
   Dataset dataset;
   dataset.source = file;
   dataset.camera_yaml = cameraYamlIn(list.parent_path());
-  for (const HdGroundListEntry& entry : parseHdGroundList(readTextFile(file), file, with_poses)) {
+  const std::string text = readTextFile(file);
+  if (with_poses && isPlainImageList(text)) with_poses = false;  // a plain list of image paths
+  for (const HdGroundListEntry& entry : parseHdGroundList(text, file, with_poses)) {
     const fs::path image = list.parent_path() / entry.image;
     std::error_code error;
     if (!fs::is_regular_file(image, error)) {
@@ -214,6 +230,20 @@ Dataset openDataset(const std::string& path) {
     throw InputError(path + ": not a dataset: expected an HD Ground list (.txt, .test) or an image folder");
   }
   return dataset;
+}
+
+void selectFrames(Dataset& dataset, long long start, long long stop, long long every) {
+  const auto n = static_cast<long long>(dataset.frames.size());
+  if (start < 0) throw InputError("--start " + std::to_string(start) + ": must be 0 or more");
+  if (every < 1) throw InputError("--every " + std::to_string(every) + ": must be 1 or more");
+  if (stop < 0 || stop > n) stop = n;
+  if (start >= stop) {
+    throw InputError(dataset.source + ": --start " + std::to_string(start) + " leaves no frame (the dataset has " + std::to_string(n) +
+                     (stop < n ? ", --stop " + std::to_string(stop) : std::string()) + ")");
+  }
+  std::vector<DatasetFrame> kept;
+  for (long long i = start; i < stop; i += every) kept.push_back(dataset.frames[static_cast<size_t>(i)]);
+  dataset.frames = std::move(kept);
 }
 
 Pose2 robotPoseFromMapHomography(const Eigen::Matrix3d& A, double cx, double cy, double meters_per_pixel) {

@@ -50,6 +50,10 @@ std::vector<HdGroundListEntry> parseHdGroundList(const std::string& text, const 
 /// Opens a list file or an image folder. Throws InputError naming the path (and line).
 Dataset openDataset(const std::string& path);
 
+/// Keeps frames start, start + every, ... before `stop` (negative: to the end); their timestamps stay. Throws
+/// InputError when no frame is left or a value is out of range.
+void selectFrames(Dataset& dataset, long long start, long long stop, long long every);
+
 /// Robot pose from HD Ground's A (conventions.md): m = A (cx, cy, 1); x = s m_x, y = -s m_y,
 /// theta = atan2(-A10, A00), with s metres per map pixel.
 Pose2 robotPoseFromMapHomography(const Eigen::Matrix3d& A, double cx, double cy, double meters_per_pixel);

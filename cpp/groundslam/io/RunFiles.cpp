@@ -33,10 +33,23 @@ std::string formatCandidatesCsv(const std::vector<LoopCandidate>& candidates,
   char row[512];
   for (size_t i = 0; i < candidates.size(); ++i) {
     const LoopCandidate& c = candidates[i];
-    std::snprintf(row, sizeof(row), "%d,%d,%.6f,%d,%d,%.4f,%s,%d,%.9f,%.9f,%.9f,%.4f", c.frame_a, c.frame_b, c.bow_score,
-                  c.matches, c.inliers, c.covariance_score, c.accepted() ? "none" : loopGateName(c.rejected_by),
-                  c.accepted() ? 1 : 0, c.T_a_b.x, c.T_a_b.y, c.T_a_b.theta, c.ambiguity);
+    // A candidate never fitted (rejected before, by the BoW score or the matches) has no transform, no
+    // covariance score and no ambiguity: those fields stay empty.
+    const bool fitted = std::isfinite(c.covariance_score);
+    std::snprintf(row, sizeof(row), "%d,%d,%.6f,%d,%d,", c.frame_a, c.frame_b, c.bow_score, c.matches, c.inliers);
     csv += row;
+    if (fitted) {
+      std::snprintf(row, sizeof(row), "%.4f", c.covariance_score);
+      csv += row;
+    }
+    std::snprintf(row, sizeof(row), ",%s,%d,", c.accepted() ? "none" : loopGateName(c.rejected_by), c.accepted() ? 1 : 0);
+    csv += row;
+    if (fitted) {
+      std::snprintf(row, sizeof(row), "%.9f,%.9f,%.9f,%.4f", c.T_a_b.x, c.T_a_b.y, c.T_a_b.theta, c.ambiguity);
+      csv += row;
+    } else {
+      csv += ",,,";
+    }
     if (with_truth) {
       if (truths[i]) {
         std::snprintf(row, sizeof(row), ",%.6f,%d,%.9f,%.6f", truths[i]->distance_m, truths[i]->footprints_overlap ? 1 : 0,
@@ -69,15 +82,19 @@ std::vector<LoopCandidate> readCandidatesCsv(const std::string& path) {
       c.bow_score = std::stod(cells[2]);
       c.matches = std::stoi(cells[3]);
       c.inliers = std::stoi(cells[4]);
-      c.covariance_score = std::stod(cells[5]);
+      // Empty for a candidate never fitted: no covariance score, transform or ambiguity.
+      const auto numberOrNan = [](const std::string& cell) { return trim(cell).empty() ? std::nan("") : std::stod(cell); };
+      c.covariance_score = numberOrNan(cells[5]);
       static const std::map<std::string, LoopGate> gates = {{"none", LoopGate::none}, {"bow_score", LoopGate::bow_score},
                                                              {"matches", LoopGate::matches}, {"covariance", LoopGate::covariance},
                                                              {"ambiguous", LoopGate::ambiguous}};
       const auto gate = gates.find(cells[6]);
       if (gate == gates.end()) throw InputError(path + ":" + std::to_string(number) + ": unknown gate '" + cells[6] + "'");
       c.rejected_by = gate->second;
-      c.T_a_b = Pose2(std::stod(cells[8]), std::stod(cells[9]), std::stod(cells[10]));
-      c.ambiguity = std::stod(cells[11]);
+      if (std::isfinite(c.covariance_score) || !trim(cells[8]).empty()) {
+        c.T_a_b = Pose2(std::stod(cells[8]), std::stod(cells[9]), std::stod(cells[10]));
+      }
+      c.ambiguity = numberOrNan(cells[11]);
       candidates.push_back(c);
     } catch (const std::logic_error&) {
       throw InputError(path + ":" + std::to_string(number) + ": not a number in the row");
