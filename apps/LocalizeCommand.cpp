@@ -33,6 +33,7 @@ struct LocalizeOptions {
   std::string dataset;
   std::string config;
   std::string out_dir;
+  std::string calibration;  ///< OpenCV / ROS / Kalibr calibration: intrinsics and distortion
 };
 
 struct Localized {
@@ -94,7 +95,7 @@ std::string accuracySummary(const std::vector<Localized>& rows, const Trajectory
 
 void localize(const LocalizeOptions& o) {
   const Dataset dataset = openDataset(o.dataset);
-  const Config config = loadDatasetConfig(dataset.camera_yaml, o.config);
+  const Config config = loadDatasetConfig(dataset.camera_yaml, o.config, o.calibration);
   const auto vocabulary = loadVocabulary(config);
   const FeatureMap map = readMap(o.map, vocabulary);
   const std::string target = o.out_dir.empty() ? newRunFolderName("runs") : o.out_dir;
@@ -146,6 +147,8 @@ void addLocalizeCommand(CLI::App& app) {
   cmd->add_option("MAP", o->map, "Map file (map.gsmap written by groundslam run)")->required()->check(CLI::ExistingFile);
   cmd->add_option("DATASET", o->dataset, "HD Ground list (.txt/.test), a .txt list of image paths, or an image folder")->required();
   cmd->add_option("--config", o->config, "Configuration YAML, applied over camera.yaml beside the dataset");
+  cmd->add_option("--calibration", o->calibration, "Camera calibration (OpenCV, ROS camera_info, Kalibr): intrinsics and distortion")
+      ->check(CLI::ExistingFile);
   cmd->add_option("--out", o->out_dir, "Folder for localizations.csv and localized.tum (default: a new folder runs/YYYYmmdd_HHMMSS)");
   cmd->callback([o]() { localize(*o); });
 }

@@ -33,6 +33,7 @@ struct RunOptions {
   bool no_loop_closure = false;
   bool report = false;
   long long start = 0, stop = -1, every = 1;  ///< frames start, start + every, ... before stop (-1: the end)
+  std::string calibration;  ///< OpenCV / ROS / Kalibr calibration file: the intrinsics and distortion
 };
 
 /// How far a run got: every frame, or the frames before a stop signal.
@@ -43,7 +44,7 @@ struct RunProgress {
 };
 
 Config loadRunConfig(const Dataset& dataset, const RunOptions& o) {
-  Config config = loadDatasetConfig(dataset.camera_yaml, o.config);
+  Config config = loadDatasetConfig(dataset.camera_yaml, o.config, o.calibration);
   if (o.no_loop_closure) config.loop_closure.enabled = false;
   return config;
 }
@@ -168,6 +169,9 @@ void addRunCommand(CLI::App& app) {
                                     "poses come out in its frame and DIR/map.gsmap is the merged map")
       ->check(CLI::ExistingFile);
   cmd->add_flag("--no-loop-closure", o->no_loop_closure, "Odometry only (sets loop_closure.enabled = false)");
+  cmd->add_option("--calibration", o->calibration,
+                  "Camera calibration (OpenCV FileStorage YAML/XML, ROS camera_info, Kalibr camchain): intrinsics and distortion; "
+                  "the mount stays from camera.yaml / --config")->check(CLI::ExistingFile);
   cmd->add_option("--start", o->start, "First frame (index in the dataset)")->capture_default_str();
   cmd->add_option("--stop", o->stop, "Stop before this frame (-1: the last frame)")->capture_default_str();
   cmd->add_option("--every", o->every, "Every Nth frame from --start")->capture_default_str();

@@ -44,7 +44,12 @@ std::vector<Eigen::Vector2d> CameraModel::normalisedRays(const std::vector<Eigen
   std::vector<cv::Point2d> undistorted;
   // The default 5 iterations leave micrometre errors under strong distortion; iterate to convergence.
   const cv::TermCriteria criteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 100, 1e-12);
-  cv::undistortPoints(distorted, undistorted, K, D, cv::noArray(), cv::noArray(), criteria);
+  if (intrinsics_.model == DistortionModel::equidistant) {
+    const cv::Vec4d D4(intrinsics_.distortion[0], intrinsics_.distortion[1], intrinsics_.distortion[2], intrinsics_.distortion[3]);
+    cv::fisheye::undistortPoints(distorted, undistorted, K, D4, cv::noArray(), cv::noArray(), criteria);
+  } else {
+    cv::undistortPoints(distorted, undistorted, K, D, cv::noArray(), cv::noArray(), criteria);
+  }
   for (size_t i = 0; i < pixels.size(); ++i) rays[i] = {undistorted[i].x, undistorted[i].y};
   return rays;
 }
@@ -76,7 +81,16 @@ std::optional<Eigen::Vector2d> CameraModel::groundToPixel(const Eigen::Vector2d&
   const Eigen::Vector3d p_camera = T_robot_camera_.inverse() * Eigen::Vector3d(p_robot.x(), p_robot.y(), 0.0);
   if (p_camera.z() <= 0.0) return std::nullopt;
   const double xn = p_camera.x() / p_camera.z(), yn = p_camera.y() / p_camera.z();
-  const auto& d = intrinsics_.distortion;  // k1 k2 p1 p2 k3, OpenCV's model
+  const auto& d = intrinsics_.distortion;
+  if (intrinsics_.model == DistortionModel::equidistant) {
+    // The angle from the optical axis, distorted by the polynomial, along the same direction in the image.
+    const double r = std::hypot(xn, yn);
+    const double theta = std::atan(r), t2 = theta * theta;
+    const double theta_d = theta * (1.0 + t2 * (d[0] + t2 * (d[1] + t2 * (d[2] + t2 * d[3]))));
+    const double scale = r > 1e-12 ? theta_d / r : 1.0;
+    return Eigen::Vector2d(intrinsics_.fx * xn * scale + intrinsics_.cx, intrinsics_.fy * yn * scale + intrinsics_.cy);
+  }
+  // k1 k2 p1 p2 k3, OpenCV's radial-tangential model
   const double r2 = xn * xn + yn * yn;
   const double radial = 1.0 + d[0] * r2 + d[1] * r2 * r2 + d[4] * r2 * r2 * r2;
   const double xd = xn * radial + 2.0 * d[2] * xn * yn + d[3] * (r2 + 2.0 * xn * xn);

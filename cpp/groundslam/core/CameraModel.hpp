@@ -11,12 +11,18 @@
 
 namespace groundslam {
 
+/// radtan: OpenCV's radial-tangential model (k1 k2 p1 p2 k3; ROS plumb_bob, Kalibr radtan). equidistant:
+/// the fisheye model of cv::fisheye and Kalibr (k1 k2 k3 k4 in the first four coefficients; theta_d = theta (1 +
+/// k1 theta^2 + k2 theta^4 + k3 theta^6 + k4 theta^8)).
+enum class DistortionModel { radtan, equidistant };
+
 struct CameraIntrinsics {
   int width = 0;                               ///< image width, pixels
   int height = 0;                              ///< image height, pixels
   double fx = 0.0, fy = 0.0;                   ///< focal lengths, pixels
   double cx = 0.0, cy = 0.0;                   ///< principal point, pixels
-  std::array<double, 5> distortion{};          ///< OpenCV k1 k2 p1 p2 k3
+  std::array<double, 5> distortion{};          ///< radtan: k1 k2 p1 p2 k3; equidistant: k1 k2 k3 k4 (fifth unused)
+  DistortionModel model = DistortionModel::radtan;
 };
 
 /// The default mount: camera `height_m` above the robot origin looking straight down,

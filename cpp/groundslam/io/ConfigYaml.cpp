@@ -1,5 +1,7 @@
 #include "groundslam/io/ConfigYaml.hpp"
 
+#include "groundslam/io/CalibrationFile.hpp"
+
 #include <algorithm>
 #include <charconv>
 #include <cmath>
@@ -281,11 +283,23 @@ Config loadConfig(const std::vector<std::string>& paths) {
   return loader.finish();
 }
 
-Config loadDatasetConfig(const std::optional<std::string>& camera_yaml, const std::string& user_config) {
-  std::vector<std::string> layers;
-  if (camera_yaml) layers.push_back(*camera_yaml);
-  if (!user_config.empty()) layers.push_back(user_config);
-  return loadConfig(layers);
+Config loadDatasetConfig(const std::optional<std::string>& camera_yaml, const std::string& user_config,
+                         const std::string& calibration) {
+  ConfigLoader loader;
+  if (camera_yaml) loader.applyFile(*camera_yaml);
+  if (!user_config.empty()) loader.applyFile(user_config);
+  if (!calibration.empty()) {
+    // The calibration's intrinsics, size and distortion, as a last layer over the camera section.
+    const Calibration c = readCalibration(calibration);
+    char text[1024];
+    std::snprintf(text, sizeof(text),
+                  "camera:\n  image_width: %d\n  image_height: %d\n  fx: %.17g\n  fy: %.17g\n  cx: %.17g\n  cy: %.17g\n"
+                  "  distortion: [%.17g, %.17g, %.17g, %.17g, %.17g]\n  distortion_model: %s\n",
+                  c.image_width, c.image_height, c.fx, c.fy, c.cx, c.cy, c.distortion[0], c.distortion[1], c.distortion[2],
+                  c.distortion[3], c.distortion[4], c.distortion_model.c_str());
+    loader.applyText(text, calibration + " (" + c.format + " calibration)");
+  }
+  return loader.finish();
 }
 
 std::string configToYaml(const Config& config, const std::vector<std::string>& only_sections) {

@@ -34,7 +34,10 @@ class ConfigLoader {
 Config loadConfig(const std::vector<std::string>& paths);
 
 /// A dataset's configuration: its camera.yaml (when it has one), then the user's file (when given).
-Config loadDatasetConfig(const std::optional<std::string>& camera_yaml, const std::string& user_config);
+/// `calibration` (optional): an OpenCV / ROS / Kalibr calibration file whose intrinsics, image size and
+/// distortion go over the camera section (io/CalibrationFile.hpp); the mount stays from the YAML files.
+Config loadDatasetConfig(const std::optional<std::string>& camera_yaml, const std::string& user_config,
+                         const std::string& calibration = "");
 
 /// The effective configuration as YAML text: every key, or only those of the named sections.
 std::string configToYaml(const Config& config, const std::vector<std::string>& only_sections = {});

@@ -25,7 +25,8 @@ struct CameraConfig {
   int image_height = 0;                     ///< pixels (required)
   double fx = 0.0, fy = 0.0;                ///< focal lengths, pixels (required)
   double cx = 0.0, cy = 0.0;                ///< principal point, pixels (required)
-  std::array<double, 5> distortion{};       ///< OpenCV k1 k2 p1 p2 k3 (required)
+  std::array<double, 5> distortion{};       ///< OpenCV k1 k2 p1 p2 k3 (required); equidistant: k1 k2 k3 k4 0
+  std::string distortion_model = "radtan";  ///< radtan (OpenCV, ROS plumb_bob) | equidistant (fisheye)
   double mounting_height_m = 0.25;          ///< used when T_robot_camera is absent (required)
   std::optional<std::array<double, 16>> T_robot_camera;  ///< row-major 4x4, overrides the default mount
 };
@@ -146,6 +147,7 @@ void visitConfigFields(Config_& c, Visitor&& v) {
   v("camera", "cx", c.camera.cx, Range{});
   v("camera", "cy", c.camera.cy, Range{});
   v("camera", "distortion", c.camera.distortion, Range{});
+  v("camera", "distortion_model", c.camera.distortion_model, Choices{"radtan", "equidistant"});
   v("camera", "mounting_height_m", c.camera.mounting_height_m, kPositive);
   v("camera", "T_robot_camera", c.camera.T_robot_camera, Range{});
   v("dataset", "map_meters_per_pixel", c.dataset.map_meters_per_pixel, kPositive);
