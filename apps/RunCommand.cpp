@@ -34,6 +34,7 @@ struct RunOptions {
   bool report = false;
   long long start = 0, stop = -1, every = 1;  ///< frames start, start + every, ... before stop (-1: the end)
   std::string calibration;  ///< OpenCV / ROS / Kalibr calibration file: the intrinsics and distortion
+  int camera = -1;          ///< a camera device instead of DATASET (-1: none)
 };
 
 /// How far a run got: every frame, or the frames before a stop signal.
@@ -77,7 +78,9 @@ RunProgress runInto(const std::string& folder, const RunOptions& o, const Datase
   writeNewFile(file("config.yaml"), configToYaml(config));
   std::vector<double> load_ms;
   const std::vector<FrameResult> results = processAll(dataset, config, slam, load_ms);
-  const RunProgress progress{results.size(), dataset.frames.size()};
+  // A video's or camera's length is what was read (an interrupted stream is still a complete run of it).
+  const size_t total = dataset.isVideo() ? results.size() : dataset.frames.size();
+  const RunProgress progress{results.size(), total};
   const Trajectory trajectory = slam.trajectory();
   writeNewFile(file("frames.csv"), formatFramesCsv(results, load_ms));
   writeNewFile(file("loop_closures.csv"), formatLoopClosuresCsv(slam.loopCandidates()));
@@ -85,7 +88,7 @@ RunProgress runInto(const std::string& folder, const RunOptions& o, const Datase
   if (slam.featureMap()) writeNewFile(file("map.gsmap"), formatMap(*slam.featureMap(), slam.mapSegment()));
   const auto measured = std::count_if(trajectory.begin(), trajectory.end(), [](const StampedPose& p) { return p.measured; });
   std::cout << "timestamps from " << dataset.timestamps_from << "\n";
-  std::cout << "processed " << results.size() << " of " << dataset.frames.size() << " frames: " << measured << " measured, "
+  std::cout << "processed " << results.size() << " of " << total << " frames: " << measured << " measured, "
             << countStatus(results, "fallback") << " with fallback odometry (pose assumed from earlier motion), "
             << countStatus(results, "lost") << " lost (tracking lost, not yet relocalized), " << countStatus(results, "relocalized")
             << " relocalizations, " << countLoopClosures(results) << " loop closures\n";
@@ -118,7 +121,8 @@ std::vector<std::string> runInputs(const RunOptions& o, const Dataset& dataset, 
 }
 
 void run(const RunOptions& o) {
-  Dataset dataset = openDataset(o.dataset);
+  if (o.dataset.empty() == (o.camera < 0)) throw InputError("give either DATASET or --camera N");
+  Dataset dataset = o.camera >= 0 ? openCameraDevice(o.camera, std::nullopt) : openDataset(o.dataset);
   selectFrames(dataset, o.start, o.stop, o.every);
   const Config config = loadRunConfig(dataset, o);
   const std::string target = o.out_dir.empty() ? newRunFolderName("runs") : o.out_dir;
@@ -160,7 +164,8 @@ void run(const RunOptions& o) {
 void addRunCommand(CLI::App& app) {
   auto o = std::make_shared<RunOptions>();
   CLI::App* cmd = app.add_subcommand("run", "Run SLAM on an HD Ground list or an image folder");
-  cmd->add_option("DATASET", o->dataset, "HD Ground list (.txt/.test), a .txt list of image paths, or an image folder")->required();
+  cmd->add_option("DATASET", o->dataset, "HD Ground list (.txt/.test), a .txt list of image paths, an image folder or a video file");
+  cmd->add_option("--camera", o->camera, "Read a camera device (OpenCV index) instead of DATASET; its calibration and mount from --config / --calibration");
   cmd->add_option("--config", o->config, "Configuration YAML, applied over camera.yaml beside the dataset");
   cmd->add_option("--out", o->out_dir,
                   "Run folder for the results; replaced only when the run succeeds, refused when it holds other files "

@@ -7,7 +7,11 @@
 #include <gtest/gtest.h>
 
 #include "TestFiles.hpp"
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/videoio.hpp>
+
 #include "groundslam/io/ConfigYaml.hpp"
+#include "groundslam/io/Dataset.hpp"
 #include "groundslam/io/Files.hpp"
 #include "groundslam/io/Tum.hpp"
 
@@ -111,4 +115,33 @@ TEST(EndToEnd, LoopClosureBeatsOdometryOnALoopDrivenTwice) {
   const std::string again = readTextFile((dir / "again.json").string());
   EXPECT_EQ(jsonNumber(again, "accepted"), jsonNumber(slam, "accepted"));
   EXPECT_DOUBLE_EQ(jsonNumber(again, "recall"), jsonNumber(slam, "recall"));
+}
+
+TEST(EndToEnd, VideoFileIsReadInOrderWithItsClock) {
+  // The simulated images as an MJPG video at 10 frames/s: `run video.avi` tracks it like the images, with
+  // timestamps from the video (0, 0.1, 0.2 s ...), and --start/--every pick frames while reading.
+  const auto dir = scratchDir();
+  ASSERT_EQ(runCli("simulate " + (dir / "seq").string() + " --frames 40 --seed 6 > /dev/null"), 0);
+  const Dataset images = openDataset((dir / "seq" / "sequence.txt").string());
+  {
+    cv::VideoWriter writer((dir / "seq" / "drive.avi").string(), cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), 10.0, cv::Size(320, 240), false);
+    ASSERT_TRUE(writer.isOpened());
+    for (const DatasetFrame& frame : images.frames) writer.write(cv::imread(frame.image_path, cv::IMREAD_GRAYSCALE));
+  }
+  ASSERT_EQ(runCli("run " + (dir / "seq" / "drive.avi").string() + " --out " + (dir / "video").string() + " > /dev/null"), 0);
+  ASSERT_EQ(runCli("run " + (dir / "seq" / "sequence.txt").string() + " --out " + (dir / "images").string() + " > /dev/null"), 0);
+  const auto video = readTum((dir / "video" / "trajectory.tum").string());
+  const auto reference = readTum((dir / "images" / "trajectory.tum").string());
+  ASSERT_EQ(video.size(), 40u);
+  for (size_t i = 0; i < video.size(); ++i) {
+    EXPECT_NEAR(video[i].timestamp, 0.1 * static_cast<double>(i), 1e-6);
+    // MJPG is lossy: the same motion within a millimetre.
+    EXPECT_NEAR((video[i].T_world_robot.translation() - reference[i].T_world_robot.translation()).norm(), 0.0, 1e-3) << i;
+  }
+  ASSERT_EQ(runCli("run " + (dir / "seq" / "drive.avi").string() + " --start 10 --every 2 --out " + (dir / "every").string() +
+                   " > /dev/null"), 0);
+  const auto every = readTum((dir / "every" / "trajectory.tum").string());
+  ASSERT_EQ(every.size(), 15u);
+  EXPECT_NEAR(every[1].timestamp, 1.2, 1e-6);
+  EXPECT_NE(runCli("run " + (dir / "seq" / "missing.mp4").string() + " --out " + (dir / "bad").string() + " 2> /dev/null"), 0);
 }

@@ -220,7 +220,12 @@ Dataset openDataset(const std::string& path) {
   if (!fs::exists(p)) throw InputError(path + ": no such file or folder");
   Dataset dataset;
   const std::string ext = p.extension().string();
-  if (fs::is_directory(p)) {
+  if (isVideoFile(path) && !fs::is_directory(p)) {
+    dataset.source = path;
+    dataset.video_file = path;
+    dataset.camera_yaml = cameraYamlIn(p.parent_path());
+    dataset.timestamps_from = "the video's clock";
+  } else if (fs::is_directory(p)) {
     dataset = openImageFolder(p);
     assignTimestamps(dataset, p);
   } else if (ext == ".txt" || ext == ".test") {
@@ -232,10 +237,32 @@ Dataset openDataset(const std::string& path) {
   return dataset;
 }
 
+bool isVideoFile(const std::string& path) {
+  static const std::set<std::string> extensions = {".mp4", ".avi", ".mkv", ".mov", ".webm", ".m4v", ".mjpg", ".mjpeg"};
+  std::string ext = fs::path(path).extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return extensions.count(ext) > 0;
+}
+
+Dataset openCameraDevice(int device, const std::optional<std::string>& camera_yaml) {
+  if (device < 0) throw InputError("--camera " + std::to_string(device) + ": a device index is 0 or more");
+  Dataset dataset;
+  dataset.source = "camera " + std::to_string(device);
+  dataset.camera_device = device;
+  dataset.camera_yaml = camera_yaml;
+  dataset.timestamps_from = "the clock (seconds since the first frame)";
+  return dataset;
+}
+
 void selectFrames(Dataset& dataset, long long start, long long stop, long long every) {
   const auto n = static_cast<long long>(dataset.frames.size());
   if (start < 0) throw InputError("--start " + std::to_string(start) + ": must be 0 or more");
   if (every < 1) throw InputError("--every " + std::to_string(every) + ": must be 1 or more");
+  if (dataset.isVideo()) {  // applied while reading: the length of a video or a camera's stream is not known
+    if (stop >= 0 && stop <= start) throw InputError(dataset.source + ": --stop " + std::to_string(stop) + " leaves no frame after --start");
+    dataset.video_start = start, dataset.video_stop = stop, dataset.video_every = every;
+    return;
+  }
   if (stop < 0 || stop > n) stop = n;
   if (start >= stop) {
     throw InputError(dataset.source + ": --start " + std::to_string(start) + " leaves no frame (the dataset has " + std::to_string(n) +

@@ -32,6 +32,12 @@ struct Dataset {
   /// order, beside the list or in the images' folder), "file names" (every image named by a number, e.g.
   /// 1700000000.133.png, increasing), or "index" (0, 1, 2, ...).
   std::string timestamps_from = "index";
+  /// A video file or a camera device instead of images (then `frames` is empty): read in order through
+  /// OpenCV's VideoCapture, timestamps from the video's clock (a device: seconds since the first frame).
+  std::optional<std::string> video_file;
+  std::optional<int> camera_device;
+  long long video_start = 0, video_stop = -1, video_every = 1;  ///< frames kept (selectFrames), for videos
+  bool isVideo() const { return video_file.has_value() || camera_device.has_value(); }
   bool hasGroundTruth() const;
 };
 
@@ -47,8 +53,15 @@ struct HdGroundListEntry {
 /// Checks every pose matrix; does not look at the file system. Throws InputError "FILE:LINE: ...".
 std::vector<HdGroundListEntry> parseHdGroundList(const std::string& text, const std::string& file, bool with_poses);
 
-/// Opens a list file or an image folder. Throws InputError naming the path (and line).
+/// Opens a list file (HD Ground, or a .txt of image paths), an image folder or a video file (.mp4, .avi,
+/// .mkv, .mov, .webm). Throws InputError naming the path (and line).
 Dataset openDataset(const std::string& path);
+
+/// A camera device (OpenCV's index, /dev/videoN), with `camera_yaml` for its calibration and mount.
+Dataset openCameraDevice(int device, const std::optional<std::string>& camera_yaml);
+
+/// True for file names with a video extension.
+bool isVideoFile(const std::string& path);
 
 /// Keeps frames start, start + every, ... before `stop` (negative: to the end); their timestamps stay. Throws
 /// InputError when no frame is left or a value is out of range.

@@ -5,15 +5,81 @@
 #include <future>
 #include <memory>
 
+#include <opencv2/imgproc.hpp>
+#include <opencv2/videoio.hpp>
+
 #include "groundslam/io/ImageFile.hpp"
+#include "groundslam/io/InputError.hpp"
 
 namespace groundslam {
 
-RunnerOutput runDataset(const Dataset& dataset, const Config& config, Slam& slam, const RunnerCallbacks& callbacks) {
-  struct Loaded {
-    double load_ms;
-    PreparedFrame frame;
+namespace {
+
+struct Loaded {
+  double load_ms;
+  PreparedFrame frame;
+};
+
+/// A video file or camera device, read in order: while the back end works on one frame, the next is read,
+/// prepared and matched to its predecessor on another thread (one at a time: VideoCapture reads in order).
+RunnerOutput runVideo(const Dataset& dataset, const Config& config, Slam& slam, const RunnerCallbacks& callbacks) {
+  cv::VideoCapture capture;
+  if (dataset.video_file) {
+    capture.open(*dataset.video_file);
+    if (!capture.isOpened()) throw InputError(*dataset.video_file + ": cannot open the video (unsupported codec or not a video)");
+  } else {
+    capture.open(*dataset.camera_device);
+    if (!capture.isOpened()) throw InputError(dataset.source + ": cannot open the camera device");
+  }
+  const FramePreparer preparer(config);
+  const auto clock_start = std::chrono::steady_clock::now();
+  long long read = 0;  // frames read from the video so far
+  // The next kept frame, prepared and matched to `previous` (empty at the end of the video).
+  const auto next = [&](cv::Mat previous) -> std::optional<Loaded> {
+    cv::Mat frame;
+    for (;;) {
+      const auto start = std::chrono::steady_clock::now();
+      if (dataset.video_stop >= 0 && read >= dataset.video_stop) return std::nullopt;
+      if (!capture.read(frame) || frame.empty()) return std::nullopt;
+      const long long index = read++;
+      if (index < dataset.video_start || (index - dataset.video_start) % dataset.video_every != 0) continue;
+      const double timestamp = dataset.video_file ? capture.get(cv::CAP_PROP_POS_MSEC) / 1000.0
+                                                  : std::chrono::duration<double>(start - clock_start).count();
+      cv::Mat gray;
+      if (frame.channels() == 3) cv::cvtColor(frame, gray, cv::COLOR_BGR2GRAY);
+      else if (frame.channels() == 4) cv::cvtColor(frame, gray, cv::COLOR_BGRA2GRAY);
+      else gray = frame;
+      if (gray.depth() == CV_16U) gray = toEightBit(gray);
+      if (gray.cols != config.camera.image_width || gray.rows != config.camera.image_height) {
+        throw InputError(dataset.source + ": frame " + std::to_string(index) + " is " + std::to_string(gray.cols) + "x" +
+                         std::to_string(gray.rows) + ", the camera configuration says " + std::to_string(config.camera.image_width) +
+                         "x" + std::to_string(config.camera.image_height));
+      }
+      const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+      Loaded loaded{ms, preparer.prepare(gray, timestamp)};
+      if (!previous.empty()) preparer.matchToPrevious(loaded.frame, previous);
+      return loaded;
+    }
   };
+  RunnerOutput output;
+  std::future<std::optional<Loaded>> ahead = std::async(std::launch::async, next, cv::Mat());
+  while (!(callbacks.should_stop && callbacks.should_stop())) {
+    std::optional<Loaded> current = ahead.get();
+    if (!current) break;
+    ahead = std::async(std::launch::async, next, current->frame.features.descriptors);
+    output.load_ms.push_back(current->load_ms);
+    output.results.push_back(slam.process(std::move(current->frame)));
+    if (callbacks.on_frame) callbacks.on_frame(output.results.back());
+  }
+  if (ahead.valid()) ahead.wait();
+  slam.finish();
+  return output;
+}
+
+}  // namespace
+
+RunnerOutput runDataset(const Dataset& dataset, const Config& config, Slam& slam, const RunnerCallbacks& callbacks) {
+  if (dataset.isVideo()) return runVideo(dataset, config, slam, callbacks);
   constexpr size_t kPrefetch = 2;  // frames in preparation, one preparer each
   std::vector<FramePreparer> preparers;  // built one by one: copies would share one OpenCV ORB object
   for (size_t j = 0; j < kPrefetch; ++j) preparers.emplace_back(config);
