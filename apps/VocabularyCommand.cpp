@@ -3,6 +3,8 @@
 #include <iostream>
 #include <memory>
 
+#include <unistd.h>
+
 #include <opencv2/imgcodecs.hpp>
 
 #include "Commands.hpp"
@@ -44,6 +46,15 @@ void train(const TrainOptions& o) {
   ConfigLoader loader;
   if (!o.config.empty()) loader.applyFile(o.config);
   const OrbExtractor extractor(loader.finishWithoutRequiredKeys().features);
+  // The output is checked before minutes of training, not after.
+  {
+    std::error_code error;
+    const fs::path out(o.output);
+    const fs::path parent = out.has_parent_path() ? out.parent_path() : fs::path(".");
+    if (fs::is_directory(out, error)) throw InputError("-o " + o.output + ": is a folder; name the vocabulary file to write");
+    if (!fs::is_directory(parent, error)) throw InputError("-o " + o.output + ": the folder " + parent.string() + " does not exist");
+    if (access(parent.c_str(), W_OK) != 0) throw InputError("-o " + o.output + ": cannot write into " + parent.string());
+  }
   const std::vector<std::string> all = imagePaths(o.inputs);
   if (all.empty()) throw InputError("vocabulary train: the inputs hold no images");
   std::error_code error;

@@ -44,6 +44,14 @@ std::optional<double> numericName(const std::string& path) {
   return value;
 }
 
+bool folderHasImages(const fs::path& folder) {
+  std::error_code error;
+  for (const auto& entry : fs::directory_iterator(folder, error)) {
+    if (entry.is_regular_file() && isImageFile(entry.path())) return true;
+  }
+  return false;
+}
+
 Dataset openImageFolder(const fs::path& folder) {
   std::vector<std::string> names;
   for (const auto& entry : fs::directory_iterator(folder)) {
@@ -226,6 +234,9 @@ Dataset openDataset(const std::string& path) {
     dataset.camera_yaml = cameraYamlIn(p.parent_path());
     dataset.timestamps_from = "the video's clock";
   } else if (fs::is_directory(p)) {
+    // A folder that `simulate` wrote (or any folder holding one HD Ground list and no images): its list.
+    std::error_code error;
+    if (fs::is_regular_file(p / "sequence.txt", error) && !folderHasImages(p)) return openDataset((p / "sequence.txt").string());
     dataset = openImageFolder(p);
     assignTimestamps(dataset, p);
   } else if (ext == ".txt" || ext == ".test") {
