@@ -89,8 +89,8 @@ RunProgress runInto(const std::string& folder, const RunOptions& o, const Datase
   const auto measured = std::count_if(trajectory.begin(), trajectory.end(), [](const StampedPose& p) { return p.measured; });
   std::cout << "timestamps from " << dataset.timestamps_from << "\n";
   std::cout << "processed " << results.size() << " of " << total << " frames: " << measured << " measured, "
-            << countStatus(results, "fallback") << " with fallback odometry (pose assumed from earlier motion), "
-            << countStatus(results, "lost") << " lost (tracking lost, not yet relocalized), " << countStatus(results, "relocalized")
+            << countStatus(results, FrameStatus::fallback) << " with fallback odometry (pose assumed from earlier motion), "
+            << countStatus(results, FrameStatus::lost) << " lost (tracking lost, not yet relocalized), " << countStatus(results, FrameStatus::relocalized)
             << " relocalizations, " << countLoopClosures(results) << " loop closures\n";
   std::vector<std::optional<CandidateTruth>> truths;
   const Trajectory groundtruth = dataset.hasGroundTruth() ? groundTruthOf(dataset, config) : Trajectory{};

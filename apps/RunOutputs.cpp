@@ -20,7 +20,7 @@ std::string formatFramesCsv(const std::vector<FrameResult>& results, const std::
     const StageTimes& t = r.times;
     std::snprintf(row, sizeof(row),
                   "%d,%.9f,%d,%d,%d,%s,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.7f,%.7f,%.5f,%d,%d,%.4f,%.4f,%.6f,%d\n", r.index,
-                  r.timestamp, r.keypoints, r.matches, r.inliers, r.status.c_str(), load_ms[i], t.extract_ms, t.project_ms,
+                  r.timestamp, r.keypoints, r.matches, r.inliers, r.statusName().c_str(), load_ms[i], t.extract_ms, t.project_ms,
                   t.match_ms, t.fit_ms, t.loop_ms, t.optimise_ms, load_ms[i] + t.total_ms, r.odometry.x, r.odometry.y,
                   r.odometry.theta * 180.0 / M_PI, r.still_matches, r.artifact_cells, r.mount.roll_rad * 180.0 / M_PI,
                   r.mount.pitch_rad * 180.0 / M_PI, r.mount.height_m, r.mount_estimated ? 1 : 0);
@@ -70,9 +70,9 @@ std::string runStatusYaml(const std::string& what, size_t processed, size_t tota
          "\ndataset: " + quoted(dataset) + "\nvocabulary: " + (vocabulary.empty() ? "null" : quoted(vocabulary)) + "\n";
 }
 
-int countStatus(const std::vector<FrameResult>& results, const std::string& prefix) {
+int countStatus(const std::vector<FrameResult>& results, FrameStatus status) {
   int count = 0;
-  for (const auto& r : results) count += r.status.rfind(prefix, 0) == 0 ? 1 : 0;
+  for (const auto& r : results) count += r.status == status ? 1 : 0;
   return count;
 }
 

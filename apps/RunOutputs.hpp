@@ -14,8 +14,8 @@ namespace groundslam::apps {
 
 /// `frames.csv`: index,timestamp,keypoints,matches,inliers,status, then per-stage milliseconds, total_ms.
 std::string formatFramesCsv(const std::vector<FrameResult>& results, const std::vector<double>& load_ms);
-/// Frames whose status starts with `prefix` ("fallback", "lost", "relocalized").
-int countStatus(const std::vector<FrameResult>& results, const std::string& prefix);
+/// Frames with this status.
+int countStatus(const std::vector<FrameResult>& results, FrameStatus status);
 int countLoopClosures(const std::vector<FrameResult>& results);
 /// `metrics.json`: the trajectory metrics with the loop-closure metrics under "loop_closure".
 std::string runMetricsJson(const TrajectoryMetrics& trajectory, const LoopClosureMetrics& loops);

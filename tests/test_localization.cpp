@@ -178,8 +178,8 @@ TEST(Relocalization, AKidnappedRobotRelocalizesAndTheGapSnapsIntoPlace) {
     if (i >= 250 && i < 330) continue;
     const FrameResult r = slam.process(simulator.renderFrame(i), static_cast<double>(i));
     truth.push_back({static_cast<double>(i), simulator.groundTruth()[static_cast<size_t>(i)]});
-    lost += r.status == "lost" ? 1 : 0;
-    if (r.status == "relocalized" && relocalized_at < 0) relocalized_at = i;
+    lost += r.status == FrameStatus::lost ? 1 : 0;
+    if (r.status == FrameStatus::relocalized && relocalized_at < 0) relocalized_at = i;
   }
   slam.finish();
   EXPECT_GE(lost, 1);

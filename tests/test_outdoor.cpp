@@ -229,11 +229,11 @@ TEST(StillFeatures, OdometryIgnoresAPartOfTheRobotInView) {
       const FrameResult r = slam.process(scene.frameAt(Pose2(0.015 * i, 0.0, 0.02 * i), i));
       if (i == 0) continue;
       const Pose2 expected = between(Pose2(0.015 * (i - 1), 0.0, 0.02 * (i - 1)), Pose2(0.015 * i, 0.0, 0.02 * i));
-      const bool ok = r.status == "ok" && (r.odometry.translation() - expected.translation()).norm() < 1e-4 &&
+      const bool ok = r.status == FrameStatus::ok && (r.odometry.translation() - expected.translation()).norm() < 1e-4 &&
                       std::abs(r.odometry.theta - expected.theta) < 1e-4;
       right += ok ? 1 : 0;
       if (reject) {
-        EXPECT_TRUE(ok) << "frame " << i << ": " << r.status << " " << r.odometry.x << " " << r.odometry.y;
+        EXPECT_TRUE(ok) << "frame " << i << ": " << r.statusName() << " " << r.odometry.x << " " << r.odometry.y;
         EXPECT_GE(r.still_matches, 250) << i;
       }
     }
@@ -289,7 +289,7 @@ OutdoorRun runOdometry(const sim::SimulationSettings& s, double drop_probability
     if (dropped[static_cast<size_t>(i)]) continue;
     const FrameResult r = slam.process(simulator.renderFrame(i), i);
     truth.push_back({double(i), simulator.groundTruth()[size_t(i)]});
-    if (previous && r.status == "ok") {
+    if (previous && r.status == FrameStatus::ok) {
       ++run.ok_frames;
       const Pose2 expected = between(simulator.groundTruth()[size_t(*previous)], simulator.groundTruth()[size_t(i)]);
       if ((r.odometry.translation() - expected.translation()).norm() > 0.005 ||

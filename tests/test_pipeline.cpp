@@ -35,7 +35,7 @@ TEST(Slam, OdometryFollowsASimulatedRandomWalk) {
   Slam slam(configFor(settings), nullptr);  // odometry only
   for (int i = 0; i < simulator.frameCount(); ++i) {
     const FrameResult r = slam.process(simulator.renderFrame(i), i);
-    EXPECT_EQ(r.status, i == 0 ? "first" : "ok") << i;
+    EXPECT_EQ(r.statusName(), i == 0 ? "first" : "ok") << i;
     if (i > 0) {
       EXPECT_GT(r.inliers, 100) << i;
     }
@@ -59,7 +59,8 @@ TEST(Slam, TexturelessFrameFallsBackToThePreviousMotion) {
   for (int i = 0; i < simulator.frameCount(); ++i) {
     results.push_back(slam.process(i == 6 ? blank : simulator.renderFrame(i), i));
   }
-  EXPECT_EQ(results[6].status, "fallback_too_few_matches");
+  EXPECT_EQ(results[6].status, FrameStatus::fallback);
+  EXPECT_EQ(results[6].statusName(), "fallback_too_few_matches");
   EXPECT_EQ(results[6].keypoints, 0);
   // The blank frame repeats the motion of frame 5, and frame 7 (matched to the blank) repeats it again.
   const Trajectory t = slam.trajectory();
@@ -67,8 +68,8 @@ TEST(Slam, TexturelessFrameFallsBackToThePreviousMotion) {
   const Pose2 motion6 = between(t[5].T_world_robot, t[6].T_world_robot);
   EXPECT_NEAR(motion6.x, motion5.x, 1e-12);
   EXPECT_NEAR(motion6.theta, motion5.theta, 1e-12);
-  EXPECT_EQ(results[7].status, "fallback_too_few_matches");
-  EXPECT_EQ(results[8].status, "ok");
+  EXPECT_EQ(results[7].statusName(), "fallback_too_few_matches");
+  EXPECT_EQ(results[8].status, FrameStatus::ok);
   // At constant speed the previous motion is right, so almost nothing is lost.
   const Pose2 estimated = between(t[0].T_world_robot, t[11].T_world_robot);
   const Pose2 truth = between(simulator.groundTruth()[0], simulator.groundTruth()[11]);
@@ -87,7 +88,7 @@ TEST(Slam, GuidedOdometryFollowsTheSameWalk) {
   Slam slam(config, nullptr);
   for (int i = 0; i < simulator.frameCount(); ++i) {
     const FrameResult r = slam.process(simulator.renderFrame(i), i);
-    EXPECT_EQ(r.status, i == 0 ? "first" : "ok") << i;
+    EXPECT_EQ(r.statusName(), i == 0 ? "first" : "ok") << i;
   }
   const TrajectoryMetrics m = evaluateTrajectory(truthOf(simulator), slam.trajectory()).metrics;
   EXPECT_LT(m.translation_mae_cm_per_m, 0.1);

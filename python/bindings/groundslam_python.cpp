@@ -112,13 +112,13 @@ PYBIND11_MODULE(groundslam, m) {
   py::class_<FrameResult>(m, "FrameResult", "What the pipeline reports for one frame")
       .def_readonly("index", &FrameResult::index)
       .def_readonly("timestamp", &FrameResult::timestamp)
-      .def_readonly("status", &FrameResult::status, "first | ok | fallback_<reason> | lost")
+      .def_property_readonly("status", &FrameResult::statusName, "first | ok | fallback_<reason> | lost | relocalized")
       .def_readonly("pose", &FrameResult::T_world_robot, "the estimate when the frame was processed")
       .def_readonly("keypoints", &FrameResult::keypoints)
       .def_readonly("matches", &FrameResult::matches)
       .def_readonly("inliers", &FrameResult::inliers)
       .def_readonly("loop_closures", &FrameResult::loop_closures)
-      .def("__repr__", [](const FrameResult& r) { return "FrameResult(index=" + std::to_string(r.index) + ", status='" + r.status + "')"; });
+      .def("__repr__", [](const FrameResult& r) { return "FrameResult(index=" + std::to_string(r.index) + ", status='" + r.statusName() + "')"; });
 
   py::class_<PySlam>(m, "Slam", "The SLAM pipeline, one image at a time")
       .def(py::init<const Config&>(), py::arg("config"))

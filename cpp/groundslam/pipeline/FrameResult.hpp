@@ -5,6 +5,7 @@
 
 #include "groundslam/core/MountEstimation.hpp"
 #include "groundslam/core/Pose2.hpp"
+#include "groundslam/core/RigidFit.hpp"
 
 namespace groundslam {
 
@@ -19,13 +20,23 @@ struct StageTimes {
   double total_ms = 0.0;
 };
 
+/// What became of a frame.
+enum class FrameStatus {
+  first,        ///< the first frame of the session: the origin
+  ok,           ///< odometry measured the motion from the previous frame
+  fallback,     ///< odometry failed (FrameResult::fallback_reason); the previous motion was assumed
+  lost,         ///< tracking is lost: the pose is unknown until global localization finds it
+  relocalized,  ///< global localization found the pose again (tracking resumes)
+};
+
 struct FrameResult {
   int index = 0;
   double timestamp = 0.0;
   int keypoints = 0;          ///< ground points kept
   int matches = 0;            ///< ratio-test matches to the previous frame
   int inliers = 0;            ///< matches consistent with the fitted motion
-  std::string status;         ///< first | ok | fallback_<reason>
+  FrameStatus status = FrameStatus::first;
+  FitStatus fallback_reason = FitStatus::ok;  ///< why odometry failed, when status is fallback
   Pose2 T_world_robot;        ///< the estimate when the frame was processed
   int loop_closures = 0;      ///< accepted loop closures of this frame
   Pose2 odometry;             ///< the odometry edge's motion from the previous frame (meaningful when status is ok)
@@ -34,6 +45,17 @@ struct FrameResult {
   MountState mount;           ///< the camera's roll, pitch and height used for this frame's ground points
   bool mount_estimated = false;  ///< mount was estimated from the images (else the calibrated mount)
   StageTimes times;
+  /// frames.csv's `status`: first | ok | fallback_<reason> (e.g. fallback_too_few_matches) | lost | relocalized.
+  std::string statusName() const {
+    switch (status) {
+      case FrameStatus::first: return "first";
+      case FrameStatus::ok: return "ok";
+      case FrameStatus::fallback: return std::string("fallback_") + fitStatusName(fallback_reason);
+      case FrameStatus::lost: return "lost";
+      case FrameStatus::relocalized: return "relocalized";
+    }
+    return "unknown";
+  }
 };
 
 }  // namespace groundslam

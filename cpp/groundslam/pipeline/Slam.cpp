@@ -74,17 +74,18 @@ FrameResult Slam::process(PreparedFrame prepared) {
     } else {
       addToGraph(odometry);
     }
-    result.status = lost_ ? "lost" : odometry.fallback ? std::string("fallback_") + fitStatusName(odometry.fit_status) : "ok";
+    result.status = lost_ ? FrameStatus::lost : odometry.fallback ? FrameStatus::fallback : FrameStatus::ok;
+    if (odometry.fallback) result.fallback_reason = odometry.fit_status;
     measured_.push_back(!odometry.fallback && !lost_);
   } else if (prior_frames_ > 0) {
     // On a prior map the first frame's pose is unknown until global localization finds it.
     graph_.addPose(Pose2());
     graph_.addEdge(informationFreeEdge(0, frame, Pose2()));
-    result.status = "lost";
+    result.status = FrameStatus::lost;
     measured_.push_back(false);
   } else {
     graph_.addPose(Pose2());
-    result.status = "first";
+    result.status = FrameStatus::first;
     measured_.push_back(true);
   }
 
@@ -101,7 +102,7 @@ FrameResult Slam::process(PreparedFrame prepared) {
   optimiseIfDue(result, false);
 
   result.T_world_robot = graph_.poses().back();
-  if (lost_ || result.status != "ok") recent_.clear();
+  if (lost_ || result.status != FrameStatus::ok) recent_.clear();
   if (!lost_ && config_.outdoor.estimate_mount) {
     recent_.push_back(current);
     while (recent_.size() > 30) recent_.pop_front();
@@ -148,7 +149,7 @@ void Slam::relocalize(const Keyframe& current, FrameResult& result) {
   segment_ = kMapSegment;
   for (size_t i = static_cast<size_t>(lost_since_); i < measured_.size(); ++i) measured_[i] = true;
   lost_ = false;
-  result.status = "relocalized";
+  result.status = FrameStatus::relocalized;
   ++unoptimised_loops_;
   full_optimisation_due_ = true;
   optimise_now_ = true;
