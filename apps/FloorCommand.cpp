@@ -11,9 +11,11 @@
 #include <opencv2/core/utility.hpp>
 
 #include "Commands.hpp"
+#include "Progress.hpp"
 #include "groundslam/core/FeatureExtraction.hpp"
 #include "groundslam/io/ConfigYaml.hpp"
 #include "groundslam/io/Dataset.hpp"
+#include "groundslam/io/InputError.hpp"
 #include "groundslam/io/ImageFile.hpp"
 
 namespace groundslam::apps {
@@ -29,7 +31,13 @@ template <class Extract>
 double timeExtraction(const Dataset& dataset, const char* label, Extract&& extract) {
   const auto start = std::chrono::steady_clock::now();
   size_t keypoints = 0;
-  for (const DatasetFrame& frame : dataset.frames) keypoints += extract(frame.image_path);
+  Progress progress("floor", static_cast<int>(dataset.frames.size()));  // on a terminal only (stderr)
+  int done = 0;
+  for (const DatasetFrame& frame : dataset.frames) {
+    keypoints += extract(frame.image_path);
+    progress.update(++done);
+  }
+  progress.finish();
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   const double frames = static_cast<double>(dataset.frames.size());
   std::printf("%s: %zu frames in %.2f s, single-threaded: %.2f frames/s, %.1f ms/frame (%zu keypoints)\n", label,
@@ -39,6 +47,7 @@ double timeExtraction(const Dataset& dataset, const char* label, Extract&& extra
 
 void measureFloor(const FloorOptions& o) {
   const Dataset dataset = openDataset(o.dataset);
+  if (dataset.isVideo()) throw InputError(dataset.source + ": `floor` reads image datasets (a video or camera: groundslam run)");
   const Config config = loadDatasetConfig(dataset.camera_yaml, o.config);
   cv::setNumThreads(1);
   const int width = config.camera.image_width, height = config.camera.image_height;

@@ -95,6 +95,7 @@ std::string accuracySummary(const std::vector<Localized>& rows, const Trajectory
 
 void localize(const LocalizeOptions& o) {
   const Dataset dataset = openDataset(o.dataset);
+  if (dataset.isVideo()) throw InputError(dataset.source + ": `localize` reads image datasets (a video or camera: groundslam run)");
   const Config config = loadDatasetConfig(dataset.camera_yaml, o.config, o.calibration);
   const auto vocabulary = loadVocabulary(config);
   const FeatureMap map = readMap(o.map, vocabulary);
