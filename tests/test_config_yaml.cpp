@@ -114,11 +114,19 @@ TEST(ConfigYaml, ShippedDefaultFileMatchesTheDefaultsInCode) {
   expected.camera = shipped.camera;  // the file shows HD Ground's camera; the rest must be the defaults
   EXPECT_EQ(configToYaml(shipped), configToYaml(expected));
   EXPECT_DOUBLE_EQ(shipped.camera.fx, 2195.70853);
-  // Every key is in the file, written as groundslam writes it (after the file's comment lines).
+  // Every key is in the file, written as groundslam writes it (comment lines aside), and has a comment.
   std::ifstream file(std::string(GROUNDSLAM_SOURCE_DIR) + "/config/default.yaml");
   std::string text, line;
+  std::string previous;
   while (std::getline(file, line)) {
-    if (line.rfind("#", 0) != 0) text += line + "\n";
+    const bool comment = line.find_first_not_of(' ') != std::string::npos && line[line.find_first_not_of(' ')] == '#';
+    if (!comment) {
+      text += line + "\n";
+      if (line.rfind("  ", 0) == 0) {
+        EXPECT_NE(previous.find("  # "), std::string::npos) << "key without a comment: " << line;
+      }
+    }
+    previous = line;
   }
   EXPECT_EQ(text, configToYaml(shipped));
 }
