@@ -10,6 +10,7 @@
 #include <pybind11/stl.h>
 
 #include "groundslam/groundslam.hpp"
+#include "groundslam/localization/GlobalLocalizer.hpp"
 #include "groundslam/sim/Texture.hpp"
 
 namespace py = pybind11;
@@ -65,6 +66,20 @@ struct PySlam {
   Config config;
   std::shared_ptr<const Vocabulary> vocabulary;
   Slam slam;
+};
+
+/// A saved map with what localizing an image on it needs.
+struct PyMap {
+  PyMap(const std::string& path, const Config& c)
+      : config(c), vocabulary(vocabularyFor(c)), map(readMap(path, requireVocabulary(vocabulary))), preparer(c) {}
+  static std::shared_ptr<const Vocabulary> requireVocabulary(std::shared_ptr<const Vocabulary> v) {
+    if (!v) throw std::invalid_argument("Map: needs loop closure on in the configuration (its vocabulary reads the map)");
+    return v;
+  }
+  Config config;
+  std::shared_ptr<const Vocabulary> vocabulary;
+  FeatureMap map;
+  FramePreparer preparer;
 };
 
 }  // namespace
@@ -157,6 +172,26 @@ PYBIND11_MODULE(groundslam, m) {
       "dataset_config",
       [](const Dataset& dataset, const std::string& config) { return loadDatasetConfig(dataset.camera_yaml, config); },
       py::arg("dataset"), py::arg("config") = "", "The dataset's camera.yaml with an optional configuration file over it");
+
+  py::class_<Localization>(m, "Localization", "One image localized on a map, with no pose prior")
+      .def_property_readonly("status", [](const Localization& l) { return std::string(localizationStatusName(l.status)); },
+                             "localized | too_few_votes | ambiguous | too_few_inliers | covariance | clustered")
+      .def_property_readonly("ok", &Localization::ok)
+      .def_readonly("pose", &Localization::T_map_robot, "the robot's pose in the map's frame (when ok)")
+      .def_readonly("inliers", &Localization::inliers)
+      .def_readonly("votes", &Localization::votes);
+  py::class_<PyMap>(m, "Map", "A map written by a run (map.gsmap): images are localized on it one by one")
+      .def(py::init<const std::string&, const Config&>(), py::arg("path"), py::arg("config"))
+      .def(
+          "localize",
+          [](const PyMap& map, const GrayArray& image) {
+            const cv::Mat view = asImage(image);
+            py::gil_scoped_release release;
+            const PreparedFrame prepared = map.preparer.prepare(view, 0.0);
+            return localizeGlobally(map.map, prepared.features, map.config.localization, map.config.odometry);
+          },
+          py::arg("image"), "Localizes one image (2-D uint8 array) on the map: a Localization")
+      .def_property_readonly("keyframes", [](const PyMap& map) { return map.map.anchors().size(); });
 
   m.def(
       "load_image",

@@ -112,6 +112,14 @@ def test_map_save_and_reuse(sequence):
     first.finish()
     map_path = WORK / "session.gsmap"
     first.save_map(str(map_path))
+    # One image at a time on the map, no pose prior: frame 30 where the first session put it.
+    on_map = groundslam.Map(str(map_path), config)
+    assert on_map.keyframes > 0
+    found = on_map.localize(groundslam.load_image(str(paths[30]), 320, 240))
+    assert found.ok and found.status == "localized", found.status
+    assert math.hypot(found.pose.x - first.trajectory()[30][1], found.pose.y - first.trajectory()[30][2]) < 0.003
+    blank = on_map.localize(np.full((240, 320), 128, dtype=np.uint8))
+    assert not blank.ok
     second = groundslam.Slam(config)
     second.use_map(str(map_path))
     statuses = [second.process(groundslam.load_image(str(paths[i]), 320, 240), float(i)).status for i in range(30, 46)]
