@@ -32,4 +32,10 @@ lines=$(grep -c . "$work/example.tum")
 if ! diff <(cut -d' ' -f1-4 "$work/example.tum") <(cut -d' ' -f1-4 "$work/run/trajectory.tum") > "$work/diff.txt"; then
   echo "example and groundslam run disagree:"; head "$work/diff.txt"; exit 1
 fi
+# The Python module installed with the package imports and finds the shipped data from there.
+if [ -d "$prefix/lib/python3/dist-packages" ]; then
+  PYTHONPATH="$prefix/lib/python3/dist-packages" GROUNDSLAM_DATA_DIR="$prefix/share/groundslam" /usr/bin/python3 -c \
+    "import groundslam, sys; sys.exit(0 if groundslam.__version__ and groundslam.defaults_found() else 1)" \
+    || { echo "the installed Python module does not import or find its data"; exit 1; }
+fi
 echo "installed package: example built and run, trajectory identical to groundslam run ($lines poses)"

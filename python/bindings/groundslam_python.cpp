@@ -1,6 +1,7 @@
 // Python bindings (pybind11): `import groundslam`. The same library as the `groundslam` program: configuration,
 // the SLAM pipeline one image at a time, maps and global localization, image loading and the simulator.
 #include <cstring>
+#include <filesystem>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -193,6 +194,9 @@ PYBIND11_MODULE(groundslam, m) {
           py::arg("image"), "Localizes one image (2-D uint8 array) on the map: a Localization")
       .def_property_readonly("keyframes", [](const PyMap& map) { return map.map.anchors().size(); });
 
+  m.def("default_vocabulary", &defaultVocabularyPath, "The shipped vocabulary's path (see GROUNDSLAM_DATA_DIR)");
+  m.def("defaults_found", [] { return std::filesystem::is_regular_file(defaultVocabularyPath()); },
+        "True when the shipped vocabulary is found");
   m.def(
       "load_image",
       [](const std::string& path, int width, int height) { return asArray(loadGrayImage(path, width, height)); },
