@@ -33,7 +33,8 @@ if ! diff <(cut -d' ' -f1-4 "$work/example.tum") <(cut -d' ' -f1-4 "$work/run/tr
   echo "example and groundslam run disagree:"; head "$work/diff.txt"; exit 1
 fi
 # The Python module installed with the package imports and finds the shipped data from there.
-if [ -d "$prefix/lib/python3/dist-packages" ]; then
+if ls "$build"/python/groundslam.*.so >/dev/null 2>&1; then
+  ls "$prefix"/lib/python3/dist-packages/groundslam.*.so >/dev/null 2>&1 || { echo "the Python module was not installed"; exit 1; }
   PYTHONPATH="$prefix/lib/python3/dist-packages" GROUNDSLAM_DATA_DIR="$prefix/share/groundslam" /usr/bin/python3 -c \
     "import groundslam, sys; sys.exit(0 if groundslam.__version__ and groundslam.defaults_found() else 1)" \
     || { echo "the installed Python module does not import or find its data"; exit 1; }

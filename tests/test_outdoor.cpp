@@ -79,6 +79,20 @@ TEST(MountEstimation, RecoversTiltAndHeightOfATiltedCamera) {
   EXPECT_GT((level.T_reference_current.translation() - motion.translation()).norm(), 0.002);
 }
 
+TEST(MountEstimation, AReferenceWithoutPairsIsLeftOut) {
+  // The previous frame's matches can all fall outside the pair radius while a far reference has plenty: the
+  // estimate comes from the far one (an empty observation adds nothing, and must not abort the solver).
+  const MountState reference{0.4 * kDeg, -0.3 * kDeg, 0.25};
+  const MountState truth{-0.5 * kDeg, 0.35 * kDeg, 0.2515};
+  const RayPairs pairs = observe(reference, truth, Pose2(0.045, 0.012, 0.08), 0.1, 7);
+  const MountObservation empty{{}, {}, reference, Pose2()};
+  const MountObservation full{pairs.reference, pairs.current, reference, Pose2()};
+  const MountEstimate estimate = estimateMount({empty, full}, defaultCameraMount(0.25), {});
+  ASSERT_TRUE(estimate.ok);
+  EXPECT_NEAR(estimate.current.roll_rad / kDeg, -0.5, 0.1);
+  EXPECT_NEAR(estimate.current.height_m, 0.2515, 0.0002);
+}
+
 TEST(MountEstimation, PairCostDerivativesMatchFiniteDifferences) {
   // Tilted states, a rotated motion and rays across the image: every analytic derivative against a central
   // difference. A sign or term wrong in any of the 18 entries shows as an error of the derivative's own size.

@@ -2,6 +2,7 @@
 #include <cmath>
 
 #include <gtest/gtest.h>
+#include <opencv2/imgproc.hpp>
 
 #include "groundslam/eval/TrajectoryMetrics.hpp"
 #include "groundslam/io/VocabularyFile.hpp"
@@ -123,4 +124,32 @@ TEST(Slam, ASecondLapOverTheSameGroundAddsNoPlacesButClosesLoops) {
   EXPECT_LE(loops_on_second_lap, 34);
   const TrajectoryMetrics m = evaluateTrajectory(truthOf(simulator), slam.trajectory()).metrics;
   EXPECT_LT(m.translation_mae_cm_per_m, 0.3);
+}
+
+TEST(Extraction, ReducedImageKeypointsMapBackToFullResolutionPixels) {
+  // A 1601x1201 image made of 3x3 blocks of equal pixels (plus a partial column and row of noise): reduced by 3
+  // (max_extraction_width 534) it is exactly the 533x400 image R of the block values. Extraction on the big
+  // image must then find R's keypoints, at 3 (p + 0.5) - 0.5, with R's descriptors: the partial blocks are
+  // left out and the mapping puts a reduced pixel's centre at the centre of its block.
+  sim::SimulationSettings settings;
+  settings.path.frames = 2;
+  cv::Mat small;
+  cv::resize(sim::SequenceSimulator(settings).renderFrame(0), small, cv::Size(533, 400), 0.0, 0.0, cv::INTER_LINEAR);
+  cv::Mat blocks, image;
+  cv::resize(small, blocks, cv::Size(1599, 1200), 0.0, 0.0, cv::INTER_NEAREST);
+  cv::copyMakeBorder(blocks, image, 0, 1, 0, 2, cv::BORDER_CONSTANT, cv::Scalar(255));
+  ASSERT_EQ(image.size(), cv::Size(1601, 1201));
+  OrbSettings at_full, reduced;
+  at_full.max_extraction_width = 0;
+  reduced.max_extraction_width = 534;
+  ASSERT_EQ(extractionReduction(1601, 534), 3);
+  const ImageFeatures expected = OrbExtractor(at_full).detect(small);
+  const ImageFeatures found = OrbExtractor(reduced).detect(image);
+  ASSERT_EQ(found.keypoints.size(), expected.keypoints.size());
+  ASSERT_GT(found.keypoints.size(), 500u);
+  for (size_t i = 0; i < found.keypoints.size(); ++i) {
+    EXPECT_NEAR(found.keypoints[i].pt.x, 3.0f * (expected.keypoints[i].pt.x + 0.5f) - 0.5f, 1e-3f) << i;
+    EXPECT_NEAR(found.keypoints[i].pt.y, 3.0f * (expected.keypoints[i].pt.y + 0.5f) - 0.5f, 1e-3f) << i;
+  }
+  EXPECT_EQ(cv::norm(found.descriptors, expected.descriptors, cv::NORM_HAMMING), 0.0);
 }

@@ -3,6 +3,7 @@
 #include <cstring>
 #include <filesystem>
 #include <memory>
+#include <mutex>
 #include <stdexcept>
 #include <string>
 
@@ -61,12 +62,23 @@ struct PySimulator {
   sim::SequenceSimulator simulator;
 };
 
-/// Slam with the vocabulary it was built with (maps are read with it).
+/// The image must have the configured camera's size: another size would be projected with the wrong intrinsics.
+void checkSize(const GrayArray& image, const Config& config) {
+  if (image.ndim() == 2 && (image.shape(0) != config.camera.image_height || image.shape(1) != config.camera.image_width)) {
+    throw InputError("image is " + std::to_string(image.shape(1)) + "x" + std::to_string(image.shape(0)) +
+                     ", the camera configuration says " + std::to_string(config.camera.image_width) + "x" +
+                     std::to_string(config.camera.image_height));
+  }
+}
+
+/// Slam with the vocabulary it was built with (maps are read with it). One call at a time: the GIL is released
+/// while an image is processed, so the object's own lock keeps other Python threads out.
 struct PySlam {
   explicit PySlam(const Config& c) : config(c), vocabulary(vocabularyFor(c)), slam(c, vocabulary) {}
   Config config;
   std::shared_ptr<const Vocabulary> vocabulary;
   Slam slam;
+  std::mutex lock;
 };
 
 /// A saved map with what localizing an image on it needs.
@@ -81,6 +93,7 @@ struct PyMap {
   std::shared_ptr<const Vocabulary> vocabulary;
   FeatureMap map;
   FramePreparer preparer;
+  mutable std::mutex lock;  ///< one image at a time (the preparer's ORB object)
 };
 
 }  // namespace
@@ -142,23 +155,41 @@ PYBIND11_MODULE(groundslam, m) {
           "process",
           [](PySlam& s, const GrayArray& image, double timestamp) {
             const cv::Mat view = asImage(image);
+            checkSize(image, s.config);
             py::gil_scoped_release release;
+            const std::lock_guard<std::mutex> guard(s.lock);
             return s.slam.process(view, timestamp);
           },
           py::arg("image"), py::arg("timestamp"), "image: 2-D uint8 numpy array (the camera's size); returns a FrameResult")
-      .def("finish", [](PySlam& s) { s.slam.finish(); }, "Optimises the whole graph; call after the last image")
-      .def("trajectory", [](const PySlam& s) { return trajectoryArray(s.slam.trajectory()); },
+      .def("finish", [](PySlam& s) {
+        const std::lock_guard<std::mutex> guard(s.lock);
+        s.slam.finish();
+      }, "Optimises the whole graph; call after the last image")
+      .def("trajectory", [](PySlam& s) {
+        const std::lock_guard<std::mutex> guard(s.lock);
+        return trajectoryArray(s.slam.trajectory());
+      },
            "N x 4 float64 array: timestamp, x, y, theta (metres, radians)")
-      .def("tum", [](const PySlam& s) { return formatTum(s.slam.trajectory()); }, "The trajectory as TUM lines")
+      .def("tum", [](PySlam& s) {
+        const std::lock_guard<std::mutex> guard(s.lock);
+        return formatTum(s.slam.trajectory());
+      }, "The trajectory as TUM lines")
       .def(
           "save_map",
-          [](const PySlam& s, const std::string& path) {
+          [](PySlam& s, const std::string& path) {
+            const std::lock_guard<std::mutex> guard(s.lock);
             if (!s.slam.featureMap()) throw std::invalid_argument("save_map: needs loop closure (config.loop_closure_enabled)");
             writeMap(path, *s.slam.featureMap(), s.slam.mapSegment());
           },
           py::arg("path"))
       .def(
-          "use_map", [](PySlam& s, const std::string& path) { s.slam.usePriorMap(readMap(path, s.vocabulary)); }, py::arg("path"),
+          "use_map",
+          [](PySlam& s, const std::string& path) {
+            const std::lock_guard<std::mutex> guard(s.lock);
+            if (!s.vocabulary) throw std::invalid_argument("use_map: needs loop closure (config.loop_closure_enabled)");
+            s.slam.usePriorMap(readMap(path, s.vocabulary));
+          },
+          py::arg("path"),
           "Before the first image: start on a map saved earlier (poses come out in its frame)");
 
   py::class_<DatasetFrame>(m, "DatasetFrame", "One image of a dataset")
@@ -187,7 +218,9 @@ PYBIND11_MODULE(groundslam, m) {
           "localize",
           [](const PyMap& map, const GrayArray& image) {
             const cv::Mat view = asImage(image);
+            checkSize(image, map.config);
             py::gil_scoped_release release;
+            const std::lock_guard<std::mutex> guard(map.lock);
             const PreparedFrame prepared = map.preparer.prepare(view, 0.0);
             return localizeGlobally(map.map, prepared.features, map.config.localization, map.config.odometry);
           },

@@ -100,6 +100,12 @@ def test_bad_image_is_a_clear_error(sequence):
         slam.process(np.zeros((240, 320, 3), dtype=np.uint8), 0.0)
     with pytest.raises(ValueError, match="missing.png"):
         groundslam.load_image(str(WORK / "missing.png"), 320, 240)
+    with pytest.raises(ValueError, match="image is 640x480, the camera configuration says 320x240"):
+        slam.process(np.zeros((480, 640), dtype=np.uint8), 0.0)
+    odometry_only = groundslam.Config.from_yaml(str(seq / "camera.yaml"))
+    odometry_only.loop_closure_enabled = False
+    with pytest.raises(ValueError, match="loop closure"):
+        groundslam.Slam(odometry_only).use_map(str(WORK / "whatever.gsmap"))
 
 
 def test_map_save_and_reuse(sequence):

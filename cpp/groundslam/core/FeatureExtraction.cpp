@@ -61,12 +61,17 @@ cv::Mat flattenIllumination(const cv::Mat& gray_image, double sigma_px, double m
 ImageFeatures OrbExtractor::detect(const cv::Mat& gray_image, int reduced_by) const {
   ImageFeatures features;
   reduced_by = std::max(1, reduced_by);
-  const int reduction = std::max(reduced_by, extractionReduction(gray_image.cols * reduced_by, max_extraction_width_));
+  int reduction = std::max(reduced_by, extractionReduction(gray_image.cols * reduced_by, max_extraction_width_));
+  if (reduction % reduced_by != 0) reduction = reduced_by;  // a decoder's reduction that does not divide ours: keep it as is
   cv::Mat reduced = gray_image;
   if (reduction > reduced_by) {
+    // Whole blocks only (the last partial row or column of blocks is left out): reduced pixel i then averages
+    // exactly the pixels the mapping back below assumes, on both axes.
     const int rest = reduction / reduced_by;
-    cv::resize(gray_image, reduced, cv::Size(std::max(1, gray_image.cols / rest), std::max(1, gray_image.rows / rest)), 0.0,
-               0.0, cv::INTER_AREA);
+    const cv::Size size(std::max(1, gray_image.cols / rest), std::max(1, gray_image.rows / rest));
+    const cv::Mat whole_blocks = gray_image(cv::Rect(0, 0, std::min(gray_image.cols, size.width * rest),
+                                                     std::min(gray_image.rows, size.height * rest)));
+    cv::resize(whole_blocks, reduced, size, 0.0, 0.0, cv::INTER_AREA);
   }
   const double sigma_px = flatten_window_ * reduced.cols;
   const cv::Mat image = sigma_px >= 1.0 ? flattenIllumination(reduced, sigma_px, flatten_min_range_) : reduced;

@@ -95,9 +95,9 @@ MountEstimate estimateMount(const std::vector<MountObservation>& observations, c
   if (!summary.IsSolutionUsable() || !std::isfinite(current[0] + current[1] + current[2]) || current[2] <= 0.0) return estimate;
   // The covariance of the current state (tangent space: 3 columns for it, 2 per reference, 3 per motion).
   std::vector<double*> blocks = {current};
-  for (size_t k = 0; k < observations.size(); ++k) {
-    blocks.push_back(reference_states[k].data());
-    blocks.push_back(motions[k].data());
+  for (size_t k = 0; k < observations.size(); ++k) {  // an observation without pairs added no blocks
+    if (problem.HasParameterBlock(reference_states[k].data())) blocks.push_back(reference_states[k].data());
+    if (problem.HasParameterBlock(motions[k].data())) blocks.push_back(motions[k].data());
   }
   const std::optional<Eigen::MatrixXd> full_covariance = normalCovariance(problem, blocks);
   if (!full_covariance) return estimate;

@@ -54,15 +54,25 @@ Calibration fromOpenCv(const std::string& path) {
     return cv::FileNode();
   };
   cv::Mat K, D;
-  node({"camera_matrix", "cameraMatrix", "K"}) >> K;
-  node({"distortion_coefficients", "dist_coeffs", "distCoeffs", "D"}) >> D;
-  if (K.empty() || K.rows != 3 || K.cols != 3) fail(path, "key 'camera_matrix': a 3x3 matrix is needed");
-  K.convertTo(K, CV_64F);
+  std::string model;
   Calibration c;
   c.format = "opencv";
+  try {
+    node({"camera_matrix", "cameraMatrix", "K"}) >> K;
+    node({"distortion_coefficients", "dist_coeffs", "distCoeffs", "D"}) >> D;
+    node({"distortion_model"}) >> model;
+    double width = 0.0, height = 0.0;
+    node({"image_width", "width"}) >> width;
+    node({"image_height", "height"}) >> height;
+    if (!(width >= 1.0 && width <= 100000.0 && height >= 1.0 && height <= 100000.0)) fail(path, "image_width / image_height: missing or not an image size");
+    c.image_width = static_cast<int>(width);
+    c.image_height = static_cast<int>(height);
+  } catch (const cv::Exception& e) {
+    fail(path, "bad value (camera_matrix, distortion_coefficients, image size): " + e.err);
+  }
+  if (K.empty() || K.rows != 3 || K.cols != 3) fail(path, "key 'camera_matrix': a 3x3 matrix is needed");
+  K.convertTo(K, CV_64F);
   c.fx = K.at<double>(0, 0), c.fy = K.at<double>(1, 1), c.cx = K.at<double>(0, 2), c.cy = K.at<double>(1, 2);
-  std::string model;
-  node({"distortion_model"}) >> model;
   c.distortion_model = modelName(model, path);
   std::vector<double> values;
   if (!D.empty()) {
@@ -70,9 +80,28 @@ Calibration fromOpenCv(const std::string& path) {
     values.assign(D.begin<double>(), D.end<double>());
   }
   c.distortion = coefficients(values, c.distortion_model, path);
-  node({"image_width", "width"}) >> c.image_width;
-  node({"image_height", "height"}) >> c.image_height;
   return c;
+}
+
+int sizeKey(const YAML::Node& node, const std::string& key, const std::string& path) {
+  if (!node) fail(path, "key '" + key + "' is missing");
+  double value = 0.0;
+  try {
+    value = node.as<double>();
+  } catch (const YAML::Exception&) {
+    fail(path, "key '" + key + "': not a number");
+  }
+  if (!(value >= 1.0 && value <= 100000.0) || value != std::floor(value)) fail(path, "key '" + key + "': not an image size in pixels");
+  return static_cast<int>(value);
+}
+
+std::string textKey(const YAML::Node& node, const std::string& key, const std::string& path) {
+  if (!node) return "";
+  try {
+    return node.as<std::string>();
+  } catch (const YAML::Exception&) {
+    fail(path, "key '" + key + "': not a name");
+  }
 }
 
 std::vector<double> numbers(const YAML::Node& node, const std::string& key, const std::string& path) {
@@ -94,14 +123,13 @@ Calibration fromRos(const YAML::Node& root, const std::string& path) {
   const std::vector<double> K = numbers(root["camera_matrix"]["data"], "camera_matrix.data", path);
   if (K.size() != 9) fail(path, "key 'camera_matrix.data': 9 numbers (row-major 3x3) are needed");
   c.fx = K[0], c.fy = K[4], c.cx = K[2], c.cy = K[5];
-  c.distortion_model = modelName(root["distortion_model"] ? root["distortion_model"].as<std::string>() : "", path);
+  c.distortion_model = modelName(textKey(root["distortion_model"], "distortion_model", path), path);
   if (root["distortion_coefficients"]) {
     c.distortion = coefficients(numbers(root["distortion_coefficients"]["data"], "distortion_coefficients.data", path),
                                 c.distortion_model, path);
   }
-  if (!root["image_width"] || !root["image_height"]) fail(path, "keys 'image_width' and 'image_height' are needed");
-  c.image_width = root["image_width"].as<int>();
-  c.image_height = root["image_height"].as<int>();
+  c.image_width = sizeKey(root["image_width"], "image_width", path);
+  c.image_height = sizeKey(root["image_height"], "image_height", path);
   return c;
 }
 
@@ -109,15 +137,18 @@ Calibration fromKalibr(const YAML::Node& root, const std::string& path) {
   const YAML::Node cam = root["cam0"];
   Calibration c;
   c.format = "kalibr";
-  const std::string camera_model = cam["camera_model"] ? cam["camera_model"].as<std::string>() : "pinhole";
+  const std::string camera_model = cam["camera_model"] ? textKey(cam["camera_model"], "cam0.camera_model", path) : "pinhole";
   if (camera_model != "pinhole") fail(path, "key 'cam0.camera_model': only pinhole is supported, not '" + camera_model + "'");
   const std::vector<double> k = numbers(cam["intrinsics"], "cam0.intrinsics", path);
   if (k.size() != 4) fail(path, "key 'cam0.intrinsics': [fu, fv, pu, pv] is needed");
   c.fx = k[0], c.fy = k[1], c.cx = k[2], c.cy = k[3];
-  c.distortion_model = modelName(cam["distortion_model"] ? cam["distortion_model"].as<std::string>() : "", path);
+  c.distortion_model = modelName(textKey(cam["distortion_model"], "cam0.distortion_model", path), path);
   if (cam["distortion_coeffs"]) c.distortion = coefficients(numbers(cam["distortion_coeffs"], "cam0.distortion_coeffs", path), c.distortion_model, path);
   const std::vector<double> size = numbers(cam["resolution"], "cam0.resolution", path);
   if (size.size() != 2) fail(path, "key 'cam0.resolution': [width, height] is needed");
+  for (double v : size) {
+    if (!(v >= 1.0 && v <= 100000.0) || v != std::floor(v)) fail(path, "key 'cam0.resolution': not an image size in pixels");
+  }
   c.image_width = static_cast<int>(size[0]);
   c.image_height = static_cast<int>(size[1]);
   return c;
@@ -147,7 +178,7 @@ Calibration readCalibration(const std::string& path) {
                    "(camera_matrix.data) or Kalibr camchain (cam0)");
       }
     } catch (const YAML::Exception& e) {
-      fail(path, "bad value: " + e.msg);
+      fail(path, "line " + std::to_string(e.mark.line + 1) + ": bad value: " + e.msg);
     }
   }
   if (!(c.fx > 0.0) || !(c.fy > 0.0) || !std::isfinite(c.cx) || !std::isfinite(c.cy)) fail(path, "focal lengths must be positive and finite");

@@ -182,8 +182,10 @@ void assignTimestamps(Dataset& dataset, const fs::path& folder) {
     if (!value || (!named.empty() && !(*value > named.back()))) return;  // the index, as before
     named.push_back(*value);
   }
-  for (size_t i = 0; i < named.size(); ++i) dataset.frames[i].timestamp = named[i];
-  dataset.timestamps_from = "file names";
+  // Names of 13 digits or more before any point are nanoseconds (EuRoC, ROS bag exports: 1403636579763555584.png).
+  const bool nanoseconds = !named.empty() && named.front() >= 1e12;
+  for (size_t i = 0; i < named.size(); ++i) dataset.frames[i].timestamp = nanoseconds ? named[i] * 1e-9 : named[i];
+  dataset.timestamps_from = nanoseconds ? "file names (nanoseconds)" : "file names";
 }
 
 }  // namespace

@@ -34,6 +34,7 @@ RunnerOutput runVideo(const Dataset& dataset, const Config& config, Slam& slam, 
   const FramePreparer preparer(config);
   const auto clock_start = std::chrono::steady_clock::now();
   long long read = 0;  // frames read from the video so far
+  double last_timestamp = -1.0;
   // The next kept frame, prepared and matched to `previous` (empty at the end of the video).
   const auto next = [&](cv::Mat previous) -> std::optional<Loaded> {
     cv::Mat frame;
@@ -41,10 +42,18 @@ RunnerOutput runVideo(const Dataset& dataset, const Config& config, Slam& slam, 
       const auto start = std::chrono::steady_clock::now();
       if (dataset.video_stop >= 0 && read >= dataset.video_stop) return std::nullopt;
       if (!capture.read(frame) || frame.empty()) return std::nullopt;
+      const auto arrived = std::chrono::steady_clock::now();  // a camera's frame: when read() returned it
       const long long index = read++;
       if (index < dataset.video_start || (index - dataset.video_start) % dataset.video_every != 0) continue;
-      const double timestamp = dataset.video_file ? capture.get(cv::CAP_PROP_POS_MSEC) / 1000.0
-                                                  : std::chrono::duration<double>(start - clock_start).count();
+      double timestamp = dataset.video_file ? capture.get(cv::CAP_PROP_POS_MSEC) / 1000.0
+                                            : std::chrono::duration<double>(arrived - clock_start).count();
+      // A container without usable times (or going back): the frame rate's clock, else the frame index.
+      if (!(timestamp > last_timestamp)) {
+        const double fps = capture.get(cv::CAP_PROP_FPS);
+        timestamp = fps > 0.0 ? static_cast<double>(index) / fps : static_cast<double>(index);
+        if (!(timestamp > last_timestamp)) timestamp = last_timestamp + 1e-3;
+      }
+      last_timestamp = timestamp;
       cv::Mat gray;
       if (frame.channels() == 3) cv::cvtColor(frame, gray, cv::COLOR_BGR2GRAY);
       else if (frame.channels() == 4) cv::cvtColor(frame, gray, cv::COLOR_BGRA2GRAY);

@@ -62,6 +62,7 @@ FeatureMap readMap(const std::string& path, std::shared_ptr<const Vocabulary> vo
 }
 
 FeatureMap parseMap(const std::string& bytes, const std::string& path, std::shared_ptr<const Vocabulary> vocabulary) {
+  if (!vocabulary) throw InputError(path + ": reading a map needs the vocabulary it was built with (loop closure is off)");
   if (bytes.size() < sizeof(kMagic) || std::memcmp(bytes.data(), kMagic, sizeof(kMagic)) != 0) {
     throw InputError(path + ": not a groundslam map file (bad magic)");
   }
