@@ -6,8 +6,8 @@
 
 namespace groundslam::apps {
 
-Progress::Progress(std::string label, int total)
-    : label_(std::move(label)), total_(total), enabled_(isatty(STDERR_FILENO) != 0),
+Progress::Progress(std::string label, int total, std::string unit)
+    : label_(std::move(label)), total_(total), unit_(std::move(unit)), enabled_(isatty(STDERR_FILENO) != 0),
       start_(std::chrono::steady_clock::now()), last_(start_) {}
 
 void Progress::update(int done) {
@@ -18,12 +18,13 @@ void Progress::update(int done) {
   const double elapsed = std::chrono::duration<double>(now - start_).count();
   const double rate = elapsed > 0 ? done / elapsed : 0.0;
   if (total_ <= 0) {  // a stream of unknown length (a video or a camera)
-    std::fprintf(stderr, "\r%s: %d frames, %.1f frames/s   ", label_.c_str(), done, rate);
+    std::fprintf(stderr, "\r%s: %d %s, %.1f/s   ", label_.c_str(), done, unit_.c_str(), rate);
     std::fflush(stderr);
     return;
   }
   const double left = rate > 0 ? (total_ - done) / rate : 0.0;
-  std::fprintf(stderr, "\r%s: %d/%d frames, %.1f frames/s, %.0f s left   ", label_.c_str(), done, total_, rate, left);
+  std::fprintf(stderr, "\r%s: %d/%d %s, %.1f %s/s, %.0f s left   ", label_.c_str(), done, total_, unit_.c_str(), rate,
+               unit_.c_str(), left);
   std::fflush(stderr);
 }
 

@@ -7,13 +7,15 @@ namespace groundslam::apps {
 
 class Progress {
  public:
-  Progress(std::string label, int total);
+  /// `unit`: what is counted ("frames", "%", ...).
+  Progress(std::string label, int total, std::string unit = "frames");
   void update(int done);
   void finish();
 
  private:
   std::string label_;
   int total_;
+  std::string unit_;
   bool enabled_;
   std::chrono::steady_clock::time_point start_, last_;
 };

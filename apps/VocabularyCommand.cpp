@@ -76,7 +76,10 @@ void train(const TrainOptions& o) {
     progress.update(static_cast<int>(i + 1));
   }
   progress.finish();
-  const Vocabulary vocabulary = Vocabulary::train(descriptors, o.settings);
+  Progress clustering("k-means", 100, "%");
+  const Vocabulary vocabulary =
+      Vocabulary::train(descriptors, o.settings, [&](double done) { clustering.update(static_cast<int>(100.0 * done)); });
+  clustering.finish();
   if (vocabulary.wordCount() < o.settings.branching) {
     size_t features = 0;
     for (const cv::Mat& d : descriptors) features += static_cast<size_t>(d.rows);

@@ -125,7 +125,8 @@ void Vocabulary::checkStructure() const {
   }
 }
 
-Vocabulary Vocabulary::train(const std::vector<cv::Mat>& descriptors_per_image, const VocabularySettings& settings) {
+Vocabulary Vocabulary::train(const std::vector<cv::Mat>& descriptors_per_image, const VocabularySettings& settings,
+                             const std::function<void(double)>& progress) {
   std::vector<Descriptor> all;
   for (const cv::Mat& image : descriptors_per_image) {
     for (int r = 0; r < image.rows; ++r) all.push_back(rowOf(image, r));
@@ -145,6 +146,7 @@ Vocabulary Vocabulary::train(const std::vector<cv::Mat>& descriptors_per_image, 
   for (const Descriptor& d : all) everything.push_back(&d);
   vocabulary.nodes_.push_back(Node{bitwiseMedian(everything), -1, 0, -1});
   std::vector<Pending> queue{{0, 0, everything}};
+  size_t clustered = 0;
   for (size_t q = 0; q < queue.size(); ++q) {
     Pending current = std::move(queue[q]);
     if (current.level >= settings.depth || static_cast<int>(current.points.size()) <= 1) {
@@ -153,6 +155,9 @@ Vocabulary Vocabulary::train(const std::vector<cv::Mat>& descriptors_per_image, 
       continue;
     }
     auto groups = cluster(current.points, settings.branching, settings.iterations, rng);
+    // Each level clusters every descriptor once: the work done is the points clustered over depth x all.
+    clustered += current.points.size();
+    if (progress) progress(std::min(1.0, static_cast<double>(clustered) / (static_cast<double>(all.size()) * settings.depth)));
     Node& parent = vocabulary.nodes_[static_cast<size_t>(current.node)];
     parent.first_child = static_cast<int>(vocabulary.nodes_.size());
     parent.child_count = static_cast<int>(groups.size());

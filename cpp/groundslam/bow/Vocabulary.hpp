@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <utility>
 #include <string>
+#include <functional>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -36,7 +37,9 @@ class Vocabulary {
 
   Vocabulary() = default;
   /// Trains on descriptors grouped by image (the images give the IDF weights).
-  static Vocabulary train(const std::vector<cv::Mat>& descriptors_per_image, const VocabularySettings& settings);
+  /// `progress` (optional) is called with the share of the k-means work done, 0 to 1, as clustering goes on.
+  static Vocabulary train(const std::vector<cv::Mat>& descriptors_per_image, const VocabularySettings& settings,
+                          const std::function<void(double)>& progress = {});
   static constexpr int kMaxBranching = 64;
   static constexpr int kMaxDepth = 16;
   /// Builds from stored parts (used by the file reader). Throws std::invalid_argument saying what is wrong
