@@ -126,6 +126,34 @@ TEST(Slam, ASecondLapOverTheSameGroundAddsNoPlacesButClosesLoops) {
   EXPECT_LT(m.translation_mae_cm_per_m, 0.3);
 }
 
+TEST(Slam, CandidatesGoToAnObserverInsteadOfBeingKept) {
+  // The same loop twice: once keeping every verified candidate, once handing them to an observer that counts
+  // them as they come. The observer sees the same candidates in the same order; Slam then keeps none.
+  sim::SimulationSettings settings;
+  settings.path.kind = sim::PathKind::loop;
+  settings.path.laps = 2;
+  settings.path.frames = 120;
+  const sim::SequenceSimulator simulator(settings);
+  const auto vocabulary =
+      std::make_shared<const Vocabulary>(readVocabulary(std::string(GROUNDSLAM_SOURCE_DIR) + "/config/vocabulary/ground.gslmvoc"));
+  Slam keeping(configFor(settings), vocabulary), streaming(configFor(settings), vocabulary);
+  std::vector<LoopCandidate> observed;
+  streaming.setCandidateObserver([&](const LoopCandidate& c) { observed.push_back(c); }, false);
+  for (int i = 0; i < simulator.frameCount(); ++i) {
+    const cv::Mat image = simulator.renderFrame(i);
+    keeping.process(image, i);
+    streaming.process(image, i);
+  }
+  ASSERT_GT(keeping.loopCandidates().size(), 5u);
+  EXPECT_TRUE(streaming.loopCandidates().empty());
+  ASSERT_EQ(observed.size(), keeping.loopCandidates().size());
+  for (size_t i = 0; i < observed.size(); ++i) {
+    EXPECT_EQ(observed[i].frame_a, keeping.loopCandidates()[i].frame_a);
+    EXPECT_EQ(observed[i].frame_b, keeping.loopCandidates()[i].frame_b);
+    EXPECT_EQ(observed[i].accepted(), keeping.loopCandidates()[i].accepted());
+  }
+}
+
 TEST(Extraction, ReducedImageKeypointsMapBackToFullResolutionPixels) {
   // A 1601x1201 image made of 3x3 blocks of equal pixels (plus a partial column and row of noise): reduced by 3
   // (max_extraction_width 534) it is exactly the 533x400 image R of the block values. Extraction on the big

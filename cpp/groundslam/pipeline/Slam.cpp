@@ -140,7 +140,7 @@ void Slam::relocalize(const Keyframe& current, FrameResult& result) {
   result.times.loop_ms += timer.lap();
   if (joined.empty()) return;
   for (const LoopCandidate& candidate : joined) {
-    candidates_.push_back(reported(candidate));
+    report(reported(candidate));
     graph_.addEdge({candidate.frame_a, candidate.frame_b, candidate.T_a_b,
                     informationFrom(candidate.covariance, config_.graph.min_sigma_m, config_.graph.min_sigma_rad), true});
     ++result.loop_closures;
@@ -179,9 +179,19 @@ void Slam::closeLoopsOnPriorMap(const Keyframe& current, FrameResult& result) {
   if (!candidate) return;
   graph_.addEdge({candidate->frame_a, candidate->frame_b, candidate->T_a_b,
                   informationFrom(candidate->covariance, config_.graph.min_sigma_m, config_.graph.min_sigma_rad), true});
-  candidates_.push_back(reported(*candidate));
+  report(reported(*candidate));
   ++result.loop_closures;
   ++unoptimised_loops_;
+}
+
+void Slam::setCandidateObserver(std::function<void(const LoopCandidate&)> observer, bool keep) {
+  candidate_observer_ = std::move(observer);
+  keep_candidates_ = keep;
+}
+
+void Slam::report(const LoopCandidate& candidate) {
+  if (candidate_observer_) candidate_observer_(candidate);
+  if (keep_candidates_) candidates_.push_back(candidate);
 }
 
 LoopCandidate Slam::reported(LoopCandidate candidate) const {
@@ -194,7 +204,7 @@ void Slam::closeLoops(const Keyframe& current, FrameResult& result) {
   if (!loop_closer_) return;
   StageTimer timer;
   for (const LoopCandidate& candidate : loop_closer_->process(current.index, segment_, current.features, graph_.poses())) {
-    candidates_.push_back(reported(candidate));
+    report(reported(candidate));
     if (!candidate.accepted()) continue;
     graph_.addEdge({candidate.frame_a, candidate.frame_b, candidate.T_a_b,
                     informationFrom(candidate.covariance, config_.graph.min_sigma_m, config_.graph.min_sigma_rad), true});

@@ -3,6 +3,7 @@
 // odometry (§III-B), loop closure (§III-C) and pose-graph optimisation.
 
 #include <deque>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <vector>
@@ -77,8 +78,12 @@ class Slam {
   /// The current estimate of every processed frame's pose.
   Trajectory trajectory() const;
   const PoseGraph& graph() const { return graph_; }
-  /// Every loop-closure candidate verified so far, accepted or not (frames as in FrameResult::index).
+  /// Every loop-closure candidate verified so far, accepted or not (frames as in FrameResult::index); empty
+  /// when an observer took them without keeping them.
   const std::vector<LoopCandidate>& loopCandidates() const { return candidates_; }
+  /// Each verified candidate goes to `observer` as it is decided (a long-running program can write or count
+  /// them as they come); with `keep` false Slam no longer stores them, so memory does not grow with them.
+  void setCandidateObserver(std::function<void(const LoopCandidate&)> observer, bool keep);
 
  private:
   OdometryEdge estimateOdometry(const Keyframe& previous, const Keyframe& current,
@@ -142,6 +147,9 @@ class Slam {
   std::vector<double> timestamps_;
   std::vector<bool> measured_;  ///< per frame: its pose came from a measurement, not a fallback
   std::vector<LoopCandidate> candidates_;
+  std::function<void(const LoopCandidate&)> candidate_observer_;
+  bool keep_candidates_ = true;
+  void report(const LoopCandidate& candidate);
   int unoptimised_loops_ = 0;
   bool full_optimisation_due_ = false;  ///< a loop closure corrected the estimate by more than graph.full_optimisation_correction_m
   bool window_solved_ = false;          ///< a windowed optimisation ran since the last full one
