@@ -61,8 +61,13 @@ Dataset openImageFolder(const fs::path& folder) {
   std::sort(names.begin(), names.end(), naturalLess);
   // Names that are all numbers (times: 1700000000.133.png) go in numeric order, which natural order is not
   // for decimals (".2" would come before ".133").
-  if (std::all_of(names.begin(), names.end(), [](const std::string& n) { return numericName(n).has_value(); })) {
-    std::stable_sort(names.begin(), names.end(), [](const std::string& a, const std::string& b) { return *numericName(a) < *numericName(b); });
+  std::vector<std::pair<double, std::string>> numbered;  // each name parsed once
+  for (const std::string& name : names) {
+    if (const auto value = numericName(name)) numbered.emplace_back(*value, name);
+  }
+  if (numbered.size() == names.size()) {
+    std::stable_sort(numbered.begin(), numbered.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+    for (size_t i = 0; i < names.size(); ++i) names[i] = numbered[i].second;
   }
   Dataset dataset;
   dataset.source = folder.string();

@@ -98,6 +98,18 @@ bool isJpeg(const std::string& path) {
   return in.read(reinterpret_cast<char*>(head), 3) && head[0] == 0xFF && head[1] == 0xD8 && head[2] == 0xFF;
 }
 
+InputError wrongSize(const std::string& path, int width, int height, int expected_width, int expected_height) {
+  return InputError(path + ": image is " + std::to_string(width) + "x" + std::to_string(height) +
+                    ", the camera configuration says " + std::to_string(expected_width) + "x" + std::to_string(expected_height));
+}
+
+/// Refuses an image whose header gives another size, before it is decoded.
+void checkHeaderSize(const std::string& path, int expected_width, int expected_height) {
+  if (const auto size = imageSizeFromHeader(path); size && (size->width != expected_width || size->height != expected_height)) {
+    throw wrongSize(path, size->width, size->height, expected_width, expected_height);
+  }
+}
+
 int reducedReadFlag(int factor) {
   switch (factor) {
     case 2: return cv::IMREAD_REDUCED_GRAYSCALE_2;
@@ -112,10 +124,7 @@ int reducedReadFlag(int factor) {
 DecodedImage loadGrayImageForExtraction(const std::string& path, int expected_width, int expected_height, int jpeg_reduction) {
   const int flag = reducedReadFlag(jpeg_reduction);
   if (flag == 0 || !isJpeg(path)) return DecodedImage{loadGrayImage(path, expected_width, expected_height), 1};
-  if (const auto size = imageSizeFromHeader(path); size && (size->width != expected_width || size->height != expected_height)) {
-    throw InputError(path + ": image is " + std::to_string(size->width) + "x" + std::to_string(size->height) +
-                     ", the camera configuration says " + std::to_string(expected_width) + "x" + std::to_string(expected_height));
-  }
+  checkHeaderSize(path, expected_width, expected_height);
   cv::Mat image = cv::imread(path, flag);
   if (image.empty()) throw InputError(path + ": image does not decode");
   // The scaled decoder rounds the size up: ceil(size / factor).
@@ -130,19 +139,12 @@ DecodedImage loadGrayImageForExtraction(const std::string& path, int expected_wi
 cv::Mat loadGrayImage(const std::string& path, int expected_width, int expected_height) {
   std::error_code error;
   if (!std::filesystem::is_regular_file(path, error)) throw InputError(path + ": image not found");
-  const auto wrongSize = [&](int width, int height) {
-    return InputError(path + ": image is " + std::to_string(width) + "x" + std::to_string(height) +
-                      ", the camera configuration says " + std::to_string(expected_width) + "x" +
-                      std::to_string(expected_height));
-  };
-  if (const auto size = imageSizeFromHeader(path); size && (size->width != expected_width || size->height != expected_height)) {
-    throw wrongSize(size->width, size->height);
-  }
+  checkHeaderSize(path, expected_width, expected_height);
   cv::Mat image = cv::imread(path, cv::IMREAD_GRAYSCALE | cv::IMREAD_ANYDEPTH);
   if (image.empty()) throw InputError(path + ": image does not decode");
   if (image.depth() == CV_16U) image = toEightBit(image);
   if (image.depth() != CV_8U) throw InputError(path + ": pixels are not 8- or 16-bit integers (floating-point images are not read)");
-  if (image.cols != expected_width || image.rows != expected_height) throw wrongSize(image.cols, image.rows);
+  if (image.cols != expected_width || image.rows != expected_height) throw wrongSize(path, image.cols, image.rows, expected_width, expected_height);
   return image;
 }
 
