@@ -1,4 +1,4 @@
-// The loop closer's map of places: spacing, nearest-first search, the global query, and re-filing.
+// The loop closer's map of places: spacing, nearest-first search, the global query, and moving places.
 #include <gtest/gtest.h>
 
 #include "groundslam/pipeline/PlaceMap.hpp"
@@ -25,11 +25,17 @@ std::vector<Pose2> lineDrivenTwice(double shift_y) {
 PlaceMap mapOf(const std::vector<Pose2>& estimates, double spacing_m) {
   PlaceMap map;
   for (int frame = 0; frame < static_cast<int>(estimates.size()); ++frame) {
-    if (!map.covers(estimates[size_t(frame)].translation(), spacing_m, estimates)) {
-      map.add(frame, someFeatures(frame), {{frame, 1.0f}}, estimates);
-    }
+    const Eigen::Vector2d position = estimates[size_t(frame)].translation();
+    if (!map.covers(position, spacing_m)) map.add(frame, position, someFeatures(frame), {{frame, 1.0f}});
   }
   return map;
+}
+
+/// The frames of the places within `radius_m` of `where`, nearest first.
+std::vector<int> framesNear(const PlaceMap& map, const Eigen::Vector2d& where, double radius_m) {
+  std::vector<int> frames;
+  for (const Place* place : map.near(where, radius_m)) frames.push_back(place->frame);
+  return frames;
 }
 
 }  // namespace
@@ -49,8 +55,8 @@ TEST(PlaceMap, KeepsOnePlacePerSpacingAndNothingOnTheSecondPass) {
 TEST(PlaceMap, FindsNearbyPlacesNearestFirst) {
   const std::vector<Pose2> estimates = lineDrivenTwice(0.0);
   const PlaceMap map = mapOf(estimates, 0.025);
-  EXPECT_EQ(map.framesNear({0.5, 0.0}, 0.045, estimates), (std::vector<int>{51, 48, 54}));
-  EXPECT_EQ(map.framesNear({0.5, 0.3}, 0.045, estimates), std::vector<int>{});
+  EXPECT_EQ(framesNear(map, {0.5, 0.0}, 0.045), (std::vector<int>{51, 48, 54}));
+  EXPECT_EQ(framesNear(map, {0.5, 0.3}, 0.045), std::vector<int>{});
 }
 
 TEST(PlaceMap, KeepsFeaturesToFloatPrecisionAndAnswersTheGlobalQuery) {
@@ -67,15 +73,17 @@ TEST(PlaceMap, KeepsFeaturesToFloatPrecisionAndAnswersTheGlobalQuery) {
   EXPECT_DOUBLE_EQ(best[0].score, 1.0);
 }
 
-TEST(PlaceMap, RefilingFindsPlacesWhereTheOptimisedMapPutsThem) {
+TEST(PlaceMap, MovedPlacesAreFoundWhereTheOptimisedMapPutsThem) {
   std::vector<Pose2> estimates = lineDrivenTwice(0.0);
   PlaceMap map = mapOf(estimates, 0.025);
   estimates = lineDrivenTwice(1.0);  // a correction moved the whole map by a metre
-  EXPECT_EQ(map.framesNear({0.5, 1.0}, 0.045, estimates), std::vector<int>{});  // still filed at y = 0
-  map.refile(estimates, 50);  // a window from frame 50 on moved
-  EXPECT_EQ(map.framesNear({0.5, 1.0}, 0.045, estimates), (std::vector<int>{51, 54}));
-  EXPECT_EQ(map.framesNear({0.2, 1.0}, 0.045, estimates), std::vector<int>{});  // frame 21 was not re-filed
-  map.refile(estimates, 0);  // the whole map moved
-  EXPECT_EQ(map.framesNear({0.5, 1.0}, 0.045, estimates), (std::vector<int>{51, 48, 54}));
-  EXPECT_EQ(map.framesNear({0.2, 1.0}, 0.045, estimates), (std::vector<int>{21, 18, 24}));
+  EXPECT_EQ(framesNear(map, {0.5, 1.0}, 0.045), std::vector<int>{});  // the places are still at y = 0
+  map.moveFrom(50, [&](int frame) { return estimates[size_t(frame)].translation(); });  // a window from frame 50 on moved
+  EXPECT_EQ(framesNear(map, {0.5, 1.0}, 0.045), (std::vector<int>{51, 54}));
+  EXPECT_LT((map.find(51)->position - Eigen::Vector2d(0.51, 1.0)).norm(), 1e-12);
+  EXPECT_LT((map.find(48)->position - Eigen::Vector2d(0.48, 0.0)).norm(), 1e-12);
+  EXPECT_EQ(framesNear(map, {0.2, 1.0}, 0.045), std::vector<int>{});  // frame 21 was not moved
+  map.moveFrom(0, [&](int frame) { return estimates[size_t(frame)].translation(); });  // the whole map moved
+  EXPECT_EQ(framesNear(map, {0.5, 1.0}, 0.045), (std::vector<int>{51, 48, 54}));
+  EXPECT_EQ(framesNear(map, {0.2, 1.0}, 0.045), (std::vector<int>{21, 18, 24}));
 }

@@ -106,8 +106,8 @@ void LoopCloser::admitPlaces(int frame, const std::vector<Pose2>& estimates) {
   while (!pending_.empty() && pending_.front().frame <= frame - settings_.database_delay_frames) {
     Pending& entering = pending_.front();
     const Eigen::Vector2d position = estimates[static_cast<size_t>(entering.frame)].translation();
-    if (!places_.covers(position, settings_.place_spacing_m, estimates)) {
-      places_.add(entering.frame, entering.features, std::move(entering.bow), estimates);
+    if (!places_.covers(position, settings_.place_spacing_m)) {
+      places_.add(entering.frame, position, entering.features, std::move(entering.bow));
       feature_map_.addAnchor(entering.frame, estimates[static_cast<size_t>(entering.frame)], segmentOf(entering.frame),
                              entering.features);
     }
@@ -120,14 +120,12 @@ std::vector<BowMatch> LoopCloser::selectCandidates(int frame, const BowVector& b
   // ranked by BoW score; then the best of the whole map (the paper's global search), in case drift is larger.
   const Eigen::Vector2d here = estimates[static_cast<size_t>(frame)].translation();
   std::vector<BowMatch> nearby;
-  for (const int a : places_.framesNear(here, settings_.max_search_radius_m, estimates)) {
+  for (const Place* place : places_.near(here, settings_.max_search_radius_m)) {
     if (static_cast<int>(nearby.size()) >= settings_.max_nearby_places) break;
-    if (segmentOf(a) != segmentOf(frame)) continue;  // drift across a tracking loss is unknown
+    if (segmentOf(place->frame) != segmentOf(frame)) continue;  // drift across a tracking loss is unknown
     const double reach = settings_.search_radius_m + settings_.max_disagreement_m +
-                         settings_.max_disagreement_per_m * driftPathLength(a, frame);
-    if ((estimates[static_cast<size_t>(a)].translation() - here).norm() <= reach) {
-      nearby.push_back({a, bowScore(bow, places_.find(a)->bow)});
-    }
+                         settings_.max_disagreement_per_m * driftPathLength(place->frame, frame);
+    if ((place->position - here).norm() <= reach) nearby.push_back({place->frame, bowScore(bow, place->bow)});
   }
   const auto better = [](const BowMatch& x, const BowMatch& y) { return x.score > y.score || (x.score == y.score && x.frame < y.frame); };
   std::sort(nearby.begin(), nearby.end(), better);
@@ -211,7 +209,7 @@ LoopCandidate LoopCloser::verify(int frame_a, const GroundFeatures& a, int frame
 }
 
 void LoopCloser::mapMoved(const std::vector<Pose2>& estimates, int first_moved) {
-  places_.refile(estimates, first_moved);
+  places_.moveFrom(first_moved, [&](int frame) { return estimates[static_cast<size_t>(frame)].translation(); });
   const auto& anchors = feature_map_.anchors();
   const auto first = std::partition_point(anchors.begin(), anchors.end(), [&](const MapAnchor& a) { return a.frame < first_moved; });
   for (auto anchor = first; anchor != anchors.end(); ++anchor) {

@@ -99,7 +99,7 @@ class LoopCloser {
   std::optional<LoopCandidate> localizeOnPriorMap(int frame, const GroundFeatures& features, const std::vector<Pose2>& estimates,
                                                   int prior_frames);
   int segmentOf(int frame) const { return segment_of_frame_[static_cast<size_t>(frame)]; }
-  /// Re-files the places of frames from `first_moved` on under their current estimates, after an
+  /// Moves the places and map anchors of frames from `first_moved` on to their current estimates, after an
   /// optimisation moved them.
   void mapMoved(const std::vector<Pose2>& estimates, int first_moved);
   const PlaceMap& places() const { return places_; }

@@ -49,20 +49,20 @@ void PlaceMap::forEachFiledNear(const Eigen::Vector2d& where, double radius_m, F
   }
 }
 
-bool PlaceMap::covers(const Eigen::Vector2d& position, double spacing_m, const std::vector<Pose2>& estimates) const {
+bool PlaceMap::covers(const Eigen::Vector2d& position, double spacing_m) const {
   // Position alone: ORB is rotation invariant, and a footprint turned about its centre still shares most of
   // its ground with the unturned one.
   bool covered = false;
   forEachFiledNear(position, spacing_m, [&](int place) {
-    const Pose2& kept = estimates[static_cast<size_t>(places_[static_cast<size_t>(place)].frame)];
-    if ((kept.translation() - position).norm() < spacing_m) covered = true;
+    if ((places_[static_cast<size_t>(place)].position - position).norm() < spacing_m) covered = true;
   });
   return covered;
 }
 
-void PlaceMap::add(int frame, const GroundFeatures& features, BowVector bow, const std::vector<Pose2>& estimates) {
+void PlaceMap::add(int frame, const Eigen::Vector2d& position, const GroundFeatures& features, BowVector bow) {
   Place place;
   place.frame = frame;
+  place.position = position;
   place.points.reserve(features.size());
   for (const Eigen::Vector2d& p : features.points) place.points.push_back(p.cast<float>());
   place.descriptors = features.descriptors.clone();  // its own compact buffer, not a view into a larger one
@@ -71,25 +71,24 @@ void PlaceMap::add(int frame, const GroundFeatures& features, BowVector bow, con
   bytes_ += place.bytes();
   const int index = static_cast<int>(places_.size());
   index_of_frame_[frame] = index;
-  const CellKey cell = cellOf(estimates[static_cast<size_t>(frame)].translation());
+  const CellKey cell = cellOf(position);
   grid_[cell].push_back(index);
   filed_in_.push_back(cell);
   places_.push_back(std::move(place));
 }
 
-std::vector<int> PlaceMap::framesNear(const Eigen::Vector2d& where, double radius_m,
-                                      const std::vector<Pose2>& estimates) const {
-  std::vector<std::pair<double, int>> near;  // (distance, frame)
-  forEachFiledNear(where, radius_m, [&](int place) {
-    const int frame = places_[static_cast<size_t>(place)].frame;
-    const double distance = (estimates[static_cast<size_t>(frame)].translation() - where).norm();
-    if (distance <= radius_m) near.emplace_back(distance, frame);
+std::vector<const Place*> PlaceMap::near(const Eigen::Vector2d& where, double radius_m) const {
+  std::vector<std::pair<double, int>> found;  // (distance, place index): the earlier frame breaks ties
+  std::vector<const Place*> places;
+  forEachFiledNear(where, radius_m, [&](int index) {
+    const Place& place = places_[static_cast<size_t>(index)];
+    const double distance = (place.position - where).norm();
+    if (distance <= radius_m) found.emplace_back(distance, index);
   });
-  std::sort(near.begin(), near.end());
-  std::vector<int> frames;
-  frames.reserve(near.size());
-  for (const auto& [distance, frame] : near) frames.push_back(frame);
-  return frames;
+  std::sort(found.begin(), found.end());
+  places.reserve(found.size());
+  for (const auto& [distance, index] : found) places.push_back(&places_[static_cast<size_t>(index)]);
+  return places;
 }
 
 const Place* PlaceMap::find(int frame) const {
@@ -97,12 +96,13 @@ const Place* PlaceMap::find(int frame) const {
   return found == index_of_frame_.end() ? nullptr : &places_[static_cast<size_t>(found->second)];
 }
 
-void PlaceMap::refile(const std::vector<Pose2>& estimates, int first_moved) {
+void PlaceMap::moveFrom(int first_moved, const std::function<Eigen::Vector2d(int frame)>& position_of) {
   // Places are added in frame order: those of frames from first_moved on are a suffix.
   const auto first = std::partition_point(places_.begin(), places_.end(), [&](const Place& p) { return p.frame < first_moved; });
   for (auto place = first; place != places_.end(); ++place) {
     const auto index = static_cast<size_t>(place - places_.begin());
-    const CellKey now = cellOf(estimates[static_cast<size_t>(place->frame)].translation());
+    place->position = position_of(place->frame);
+    const CellKey now = cellOf(place->position);
     if (now == filed_in_[index]) continue;
     std::vector<int>& old_cell = grid_[filed_in_[index]];
     old_cell.erase(std::find(old_cell.begin(), old_cell.end(), static_cast<int>(index)));

@@ -6,6 +6,7 @@
 // bag-of-words database (the paper's global search).
 
 #include <cstdint>
+#include <functional>
 #include <unordered_map>
 #include <vector>
 
@@ -23,6 +24,7 @@ namespace groundslam {
 /// and bag-of-words vector.
 struct Place {
   int frame = 0;
+  Eigen::Vector2d position = Eigen::Vector2d::Zero();  ///< the frame's estimated position, kept current by moveFrom
   std::vector<Eigen::Vector2f> points;
   cv::Mat descriptors;
   BowVector bow;
@@ -36,20 +38,21 @@ struct Place {
 class PlaceMap {
  public:
   /// True when a place lies within `spacing_m` of `position`.
-  bool covers(const Eigen::Vector2d& position, double spacing_m, const std::vector<Pose2>& estimates) const;
-  void add(int frame, const GroundFeatures& features, BowVector bow, const std::vector<Pose2>& estimates);
+  bool covers(const Eigen::Vector2d& position, double spacing_m) const;
+  /// Keeps `frame`, estimated at `position`, as a place.
+  void add(int frame, const Eigen::Vector2d& position, const GroundFeatures& features, BowVector bow);
 
-  /// Frames of the places whose estimated position lies within `radius_m` of `where`, nearest first.
-  /// Cost grows with the places in that disc, not with the map.
-  std::vector<int> framesNear(const Eigen::Vector2d& where, double radius_m, const std::vector<Pose2>& estimates) const;
+  /// The places whose position lies within `radius_m` of `where`, nearest first. Cost grows with the places
+  /// in that disc, not with the map.
+  std::vector<const Place*> near(const Eigen::Vector2d& where, double radius_m) const;
   /// The best `max_results` places by bag-of-words score over the whole map, best first.
   std::vector<BowMatch> query(const BowVector& bow, int max_results) const { return database_.query(bow, max_results); }
   /// The place kept for `frame`, or null.
   const Place* find(int frame) const;
 
-  /// Re-files the places of frames from `first_moved` on under their current estimates (after an
-  /// optimisation moved them): cost grows with those places only.
-  void refile(const std::vector<Pose2>& estimates, int first_moved);
+  /// Moves the places of frames from `first_moved` on to `position_of(frame)` (after an optimisation moved
+  /// their estimates) and re-files them: cost grows with those places only.
+  void moveFrom(int first_moved, const std::function<Eigen::Vector2d(int frame)>& position_of);
   int size() const { return static_cast<int>(places_.size()); }
   size_t bytes() const { return bytes_; }
 
