@@ -125,10 +125,10 @@ void BM_OrbSmall(benchmark::State& state) {
   const int variant = static_cast<int>(state.range(0));
   if (variant == 1) settings.fast_threshold = 10;
   if (variant == 2) settings.num_levels = 3;
-  if (variant == 3) settings.score_type = "fast";
+  if (variant == 3) settings.score_type = OrbScore::fast;
   if (variant == 4) settings.flatten_window = 0.0;
   if (variant == 5) {
-    settings = OrbSettings{1000, 1.2, 8, 20, 31, 31, "harris", 0, 0, 0.0};
+    settings = OrbSettings{1000, 1.2, 8, 20, 31, 31, OrbScore::harris, 0, 0, 0.0};
   }
   const OrbExtractor extractor(settings);
   size_t keypoints = 0;
@@ -158,21 +158,21 @@ void BM_GroundProjection(benchmark::State& state) {
 }
 BENCHMARK(BM_GroundProjection)->Unit(benchmark::kMillisecond);
 
-void matchWith(benchmark::State& state, const std::string& method) {
+void matchWith(benchmark::State& state, MatcherMethod method) {
   const GroundFeatures a = groundFeatures(frames().first), b = groundFeatures(frames().second);
   const DescriptorMatcher matcher({0.7, method});
   size_t matches = 0;
   for (auto _ : state) matches = matcher.match(b.descriptors, a.descriptors).size();
   state.counters["matches"] = static_cast<double>(matches);
 }
-void BM_MatchBruteForce(benchmark::State& state) { matchWith(state, "brute_force"); }
-void BM_MatchLsh(benchmark::State& state) { matchWith(state, "lsh"); }
+void BM_MatchBruteForce(benchmark::State& state) { matchWith(state, MatcherMethod::brute_force); }
+void BM_MatchLsh(benchmark::State& state) { matchWith(state, MatcherMethod::lsh); }
 BENCHMARK(BM_MatchBruteForce)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_MatchLsh)->Unit(benchmark::kMillisecond);
 
 void BM_RobustFit(benchmark::State& state) {
   const GroundFeatures a = groundFeatures(frames().first), b = groundFeatures(frames().second);
-  const auto matches = DescriptorMatcher({0.7, "brute_force"}).match(b.descriptors, a.descriptors);
+  const auto matches = DescriptorMatcher({0.7, MatcherMethod::brute_force}).match(b.descriptors, a.descriptors);
   std::vector<Eigen::Vector2d> target, source;
   for (const auto& m : matches) {
     target.push_back(a.points[static_cast<size_t>(m.train)]);
@@ -214,7 +214,7 @@ BENCHMARK(BM_IlluminationFlattening)->Arg(0)->Arg(1)->Unit(benchmark::kMilliseco
 
 void BM_StillSplit(benchmark::State& state) {
   const GroundFeatures a = groundFeatures(frames().first), b = groundFeatures(frames().second);
-  const auto matches = DescriptorMatcher({0.7, "brute_force"}).match(b.descriptors, a.descriptors);
+  const auto matches = DescriptorMatcher({0.7, MatcherMethod::brute_force}).match(b.descriptors, a.descriptors);
   for (auto _ : state) benchmark::DoNotOptimize(splitStillMatches(matches, b, a, 1.5 / frames().camera.intrinsics().fx));
   state.counters["matches"] = static_cast<double>(matches.size());
 }
@@ -223,7 +223,7 @@ BENCHMARK(BM_StillSplit)->Unit(benchmark::kMillisecond);
 void BM_MountEstimation(benchmark::State& state) {
   // One reference (the previous frame), the default 300 pairs; the pipeline uses up to three.
   const GroundFeatures a = groundFeatures(frames().first), b = groundFeatures(frames().second);
-  const auto matches = DescriptorMatcher({0.7, "brute_force"}).match(b.descriptors, a.descriptors);
+  const auto matches = DescriptorMatcher({0.7, MatcherMethod::brute_force}).match(b.descriptors, a.descriptors);
   std::vector<Eigen::Vector2d> reference, current;
   for (const auto& m : matches) {
     reference.push_back(a.rays[static_cast<size_t>(m.train)]);

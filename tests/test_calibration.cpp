@@ -61,7 +61,7 @@ TEST(Calibration, ReadsRosCameraInfoAndKalibrWithFisheye) {
   const Config config = loadDatasetConfig((dir / "camera.yaml").string(), "", (dir / "camchain.yaml").string());
   EXPECT_EQ(config.camera.image_width, 640);
   EXPECT_DOUBLE_EQ(config.camera.fy, 401.0);
-  EXPECT_EQ(config.camera.distortion_model, "equidistant");
+  EXPECT_EQ(config.camera.distortion_model, DistortionModel::equidistant);
   EXPECT_DOUBLE_EQ(config.camera.mounting_height_m, 0.3);
 }
 

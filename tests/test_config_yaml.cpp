@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include "TestFiles.hpp"
+#include "groundslam/io/ConfigNames.hpp"
 #include "groundslam/io/ConfigYaml.hpp"
 #include "groundslam/io/InputError.hpp"
 
@@ -47,14 +48,14 @@ TEST(ConfigYaml, WrittenConfigReadsBackIdentically) {
   c.camera.T_robot_camera = std::array<double, 16>{1, 0, 0, 0.1, 0, -1, 0, 0, 0, 0, -1, 0.3, 0, 0, 0, 1};
   c.dataset.map_meters_per_pixel = 1.25e-4;
   c.matching.ratio = 0.55;
-  c.odometry.loss = "cauchy";
+  c.odometry.loss = RobustLoss::cauchy;
   const std::string text = configToYaml(c);
   const Config back = load(text);
   EXPECT_EQ(configToYaml(back), text);
   EXPECT_EQ(back.camera.distortion, c.camera.distortion);
   EXPECT_EQ(*back.camera.T_robot_camera, *c.camera.T_robot_camera);
   EXPECT_DOUBLE_EQ(*back.dataset.map_meters_per_pixel, 1.25e-4);
-  EXPECT_EQ(back.odometry.loss, "cauchy");
+  EXPECT_EQ(back.odometry.loss, RobustLoss::cauchy);
 }
 
 TEST(ConfigYaml, LaterLayersOverrideEarlierOnes) {
@@ -92,6 +93,23 @@ TEST(ConfigYaml, BadValuesAreNamed) {
   m = inputErrorOf([&] { load(std::string(kCameraYaml) + "odometry:\n  loss: l2\n"); });
   EXPECT_NE(m.find("odometry.loss"), std::string::npos) << m;
   EXPECT_NE(m.find("huber"), std::string::npos) << m;
+}
+
+TEST(ConfigYaml, EnumValuesAreReadByName) {
+  ConfigLoader loader;
+  loader.applyText(kCameraYaml, "camera.yaml");
+  loader.applyText("camera:\n  distortion_model: equidistant\nfeatures:\n  score_type: fast\nmatching:\n  method: lsh\n"
+                   "odometry:\n  loss: geman_mcclure\n", "names.yaml");
+  const Config c = loader.finish();
+  EXPECT_EQ(c.camera.distortion_model, DistortionModel::equidistant);
+  EXPECT_EQ(c.features.score_type, OrbScore::fast);
+  EXPECT_EQ(c.matching.method, MatcherMethod::lsh);
+  EXPECT_EQ(c.odometry.loss, RobustLoss::geman_mcclure);
+  const std::string m = inputErrorOf([] { load(std::string(kCameraYaml) + "matching:\n  method: LSH\n"); });
+  EXPECT_NE(m.find("key 'matching.method': 'LSH' is not one of: brute_force, lsh"), std::string::npos) << m;
+  // Every name reads back to its value, and a value the enum does not declare has no name.
+  for (const auto& [value, name] : namesOf(RobustLoss{})) EXPECT_EQ(valueNamed<RobustLoss>(name), value);
+  EXPECT_EQ(nameOf(static_cast<RobustLoss>(7)), "?");
 }
 
 TEST(ConfigYaml, MissingRequiredKeyIsNamed) {

@@ -6,6 +6,7 @@
 
 #include "groundslam/core/FeatureExtraction.hpp"
 #include "groundslam/core/Matching.hpp"
+#include "groundslam/io/ConfigNames.hpp"
 
 using namespace groundslam;
 
@@ -39,14 +40,14 @@ TEST(Matching, RatioTestKeepsDistinctMatchesAndDropsAmbiguousOnes) {
   // An ambiguous query: train rows 0 and 1 made equidistant twins of it.
   cv::Mat ambiguous_train = train.clone();
   flipBits(train.row(0), 0, rng).copyTo(ambiguous_train.row(1));
-  for (const std::string method : {"brute_force", "lsh"}) {
+  for (const MatcherMethod method : {MatcherMethod::brute_force, MatcherMethod::lsh}) {
     DescriptorMatcher matcher({0.7, method});
     const auto matches = matcher.match(query, train);
     int correct = 0;
     for (const auto& m : matches) correct += (m.train == 2 * m.query) ? 1 : 0;
-    EXPECT_GE(correct, method == "lsh" ? 90 : 100) << method;
-    EXPECT_EQ(correct, static_cast<int>(matches.size())) << method;
-    const auto twin_matches = DescriptorMatcher({0.7, "brute_force"}).match(query.row(0), ambiguous_train);
+    EXPECT_GE(correct, method == MatcherMethod::lsh ? 90 : 100) << nameOf(method);
+    EXPECT_EQ(correct, static_cast<int>(matches.size())) << nameOf(method);
+    const auto twin_matches = DescriptorMatcher({0.7, MatcherMethod::brute_force}).match(query.row(0), ambiguous_train);
     EXPECT_TRUE(twin_matches.empty());
   }
 }
@@ -88,7 +89,7 @@ TEST(Matching, BruteForceGivesExactlyOpenCvsKnnMatchesAfterTheRatioTest) {
 }
 
 TEST(Matching, EmptyAndTinyInputsGiveNoMatches) {
-  DescriptorMatcher matcher({0.7, "brute_force"});
+  DescriptorMatcher matcher({0.7, MatcherMethod::brute_force});
   EXPECT_TRUE(matcher.match(cv::Mat(), randomDescriptors(10, 1)).empty());
   EXPECT_TRUE(matcher.match(randomDescriptors(10, 1), randomDescriptors(1, 2)).empty());
 }
@@ -144,7 +145,7 @@ TEST(Matching, GuidedMatchingComparesOnlyNearbyFeatures) {
   const auto guided = matchNearby(query, train, T_train_query, 0.004, 0.7);
   ASSERT_EQ(guided.size(), 60u);
   for (const auto& m : guided) EXPECT_EQ(m.train, 2 * m.query);
-  EXPECT_TRUE(DescriptorMatcher({0.7, "brute_force"}).match(query.descriptors, train.descriptors).empty());
+  EXPECT_TRUE(DescriptorMatcher({0.7, MatcherMethod::brute_force}).match(query.descriptors, train.descriptors).empty());
   // A prediction off by more than the radius finds nothing to compare with.
   EXPECT_TRUE(matchNearby(query, train, Pose2(0.3, 0.3, 0.0) * T_train_query, 0.004, 0.7).empty());
 }

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include "groundslam/core/RigidFit.hpp"
+#include "groundslam/io/ConfigNames.hpp"
 
 using namespace groundslam;
 
@@ -36,17 +37,17 @@ class KnownMotion : public ::testing::TestWithParam<double> {};
 }  // namespace
 
 TEST_P(KnownMotion, RecoveredThroughFortyPercentWrongMatches) {
-  for (const std::string loss : {"huber", "cauchy", "geman_mcclure"}) {
+  for (const RobustLoss loss : {RobustLoss::huber, RobustLoss::cauchy, RobustLoss::geman_mcclure}) {
     const double theta = GetParam() * M_PI / 180.0;
     const Pose2 truth(0.012, -0.007, theta);
     const Correspondences c = makeCorrespondences(truth, 400, 0.4, 3);
     FitSettings settings;
     settings.loss = loss;
     const RigidEstimate fit = fitRigidTransform(c.target, c.source, settings);
-    ASSERT_TRUE(fit.ok()) << loss << " " << fitStatusName(fit.status);
-    EXPECT_LT((fit.T_target_source.translation() - truth.translation()).norm(), 0.0002) << loss;
-    EXPECT_LT(std::abs(wrapAngle(fit.T_target_source.theta - truth.theta)) * 180.0 / M_PI, 0.05) << loss;
-    EXPECT_NEAR(fit.inliers, 240, 12) << loss;  // the 60% true matches
+    ASSERT_TRUE(fit.ok()) << nameOf(loss) << " " << fitStatusName(fit.status);
+    EXPECT_LT((fit.T_target_source.translation() - truth.translation()).norm(), 0.0002) << nameOf(loss);
+    EXPECT_LT(std::abs(wrapAngle(fit.T_target_source.theta - truth.theta)) * 180.0 / M_PI, 0.05) << nameOf(loss);
+    EXPECT_NEAR(fit.inliers, 240, 12) << nameOf(loss);  // the 60% true matches
     EXPECT_LT(fit.rms_residual_m, 0.0003);
   }
 }

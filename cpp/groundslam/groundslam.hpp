@@ -4,6 +4,7 @@
 // Link groundslam::groundslam (CMake: find_package(groundslam REQUIRED)).
 
 #include "groundslam/eval/TrajectoryMetrics.hpp"
+#include "groundslam/io/ConfigNames.hpp"
 #include "groundslam/io/ConfigYaml.hpp"
 #include "groundslam/io/DataFiles.hpp"
 #include "groundslam/io/Dataset.hpp"

@@ -9,7 +9,7 @@ namespace groundslam {
 
 OrbExtractor::OrbExtractor(const OrbSettings& s)
     : orb_(cv::ORB::create(s.num_features, static_cast<float>(s.scale_factor), s.num_levels, s.edge_threshold, 0, 2,
-                           s.score_type == "fast" ? cv::ORB::FAST_SCORE : cv::ORB::HARRIS_SCORE, s.patch_size,
+                           s.score_type == OrbScore::fast ? cv::ORB::FAST_SCORE : cv::ORB::HARRIS_SCORE, s.patch_size,
                            s.fast_threshold)),
       max_extraction_width_(s.max_extraction_width),
       subpixel_window_(s.subpixel_window),

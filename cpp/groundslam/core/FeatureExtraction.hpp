@@ -13,6 +13,9 @@
 
 namespace groundslam {
 
+/// How ORB ranks FAST corners before keeping the best num_features.
+enum class OrbScore { harris, fast };
+
 struct OrbSettings {
   int num_features = 1500;            ///< ORB keypoints kept per image
   double scale_factor = 1.2;          ///< pyramid decimation ratio
@@ -20,7 +23,7 @@ struct OrbSettings {
   int fast_threshold = 5;             ///< FAST corner threshold, grey levels (low: dark wet ground still has corners)
   int patch_size = 31;                ///< BRIEF patch, pixels
   int edge_threshold = 31;            ///< border without features, pixels
-  std::string score_type = "harris";  ///< harris | fast
+  OrbScore score_type = OrbScore::harris;
   int near_twin_max_distance = 0;     ///< drop descriptors this close (Hamming) to another of the same image; 0 keeps all
   int subpixel_window = 0;            ///< half-size of the cornerSubPix window refining keypoints; 0 = off
   /// > 0: before ORB, the image's background light (a Gaussian blur whose sigma is this fraction of the image

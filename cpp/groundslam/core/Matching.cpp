@@ -45,7 +45,7 @@ std::vector<Match> DescriptorMatcher::match(const cv::Mat& query, const cv::Mat&
   std::vector<Match> matches;
   if (query.empty() || train.rows < 2) return matches;
   std::vector<std::vector<cv::DMatch>> knn;
-  if (settings_.method == "lsh") {
+  if (settings_.method == MatcherMethod::lsh) {
     // 12 tables of 20-bit keys, multi-probe level 2: the usual setting for 256-bit ORB.
     cv::FlannBasedMatcher lsh(cv::makePtr<cv::flann::LshIndexParams>(12, 20, 2));
     lsh.knnMatch(query, train, knn, 2);

@@ -11,9 +11,12 @@
 
 namespace groundslam {
 
+/// How descriptors find their two nearest neighbours: exhaustively, or with FLANN's multi-probe LSH.
+enum class MatcherMethod { brute_force, lsh };
+
 struct MatcherSettings {
   double ratio = 0.7;                  ///< lambda: keep a match when f0 <= lambda * f1
-  std::string method = "brute_force";  ///< brute_force | lsh (FLANN multi-probe LSH)
+  MatcherMethod method = MatcherMethod::brute_force;
   double guided_odometry_radius_m = 0.0;  ///< > 0: odometry compares features within this of the constant-velocity prediction (faster, see docs/benchmarks.md); 0 = brute force
   double guided_min_inlier_fraction = 0.25;  ///< fewer guided inliers (fraction of keypoints) falls back to brute force
 };

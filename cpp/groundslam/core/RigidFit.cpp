@@ -28,10 +28,13 @@ class GemanMcClureLoss : public ceres::LossFunction {
   double d2_;
 };
 
-ceres::LossFunction* makeLoss(const std::string& name, double scale) {
-  if (name == "cauchy") return new ceres::CauchyLoss(scale);
-  if (name == "geman_mcclure") return new GemanMcClureLoss(scale);
-  return new ceres::HuberLoss(scale);
+ceres::LossFunction* makeLoss(RobustLoss loss, double scale) {
+  switch (loss) {
+    case RobustLoss::huber: return new ceres::HuberLoss(scale);
+    case RobustLoss::cauchy: return new ceres::CauchyLoss(scale);
+    case RobustLoss::geman_mcclure: return new GemanMcClureLoss(scale);
+  }
+  throw std::invalid_argument("odometry.loss: unknown robust loss " + std::to_string(static_cast<int>(loss)));
 }
 
 /// r = R(theta) p_source + t - p_target, the 2-D misfit of one match (paper eq. 6).

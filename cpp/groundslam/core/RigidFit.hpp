@@ -14,8 +14,11 @@
 
 namespace groundslam {
 
+/// The robust M-estimator of the fit (paper §III-B2).
+enum class RobustLoss { huber, cauchy, geman_mcclure };
+
 struct FitSettings {
-  std::string loss = "huber";    ///< huber | cauchy | geman_mcclure
+  RobustLoss loss = RobustLoss::huber;
   double loss_scale_m = 0.0005;  ///< residual at which the robust loss starts to down-weight, metres
   int min_inliers = 12;          ///< fewer inliers than this is a failed fit
   double ransac_inlier_m = 0.002;  ///< RANSAC inlier distance, metres

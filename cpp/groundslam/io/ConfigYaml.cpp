@@ -1,6 +1,7 @@
 #include "groundslam/io/ConfigYaml.hpp"
 
 #include "groundslam/io/CalibrationFile.hpp"
+#include "groundslam/io/ConfigNames.hpp"
 
 #include <algorithm>
 #include <charconv>
@@ -10,6 +11,7 @@
 #include <fstream>
 #include <map>
 #include <sstream>
+#include <type_traits>
 
 #include <yaml-cpp/yaml.h>
 
@@ -135,6 +137,14 @@ class FieldReader {
     field = value;
   }
 
+  template <class Enum>
+  void read(const YAML::Node& node, const std::string& name, Enum& field, const OneOfNames&) const {
+    if (!node.IsScalar()) fail(source_, node, name, "expected a string");
+    const std::optional<Enum> value = valueNamed<Enum>(node.Scalar());
+    if (!value) fail(source_, node, name, "'" + node.Scalar() + "' is not one of: " + allowedNames<Enum>());
+    field = *value;
+  }
+
   void read(const YAML::Node& node, const std::string& name, bool& field, const Range&) const {
     if (!node.IsScalar()) fail(source_, node, name, "expected true or false");
     try {
@@ -204,6 +214,10 @@ class FieldWriter {
   void write(int value) { out_ << value; }
   void write(bool value) { out_ << value; }
   void write(const std::string& value) { out_ << value; }
+  template <class Enum, class = std::enable_if_t<std::is_enum_v<Enum>>>
+  void write(Enum value) {
+    out_ << nameOf(value);
+  }
   template <size_t N>
   void write(const std::array<double, N>& values) {
     out_ << YAML::Flow << YAML::BeginSeq;

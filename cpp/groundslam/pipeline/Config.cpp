@@ -11,7 +11,7 @@ CameraConfig cameraConfigOf(const CameraIntrinsics& k, double mounting_height_m)
   camera.cx = k.cx;
   camera.cy = k.cy;
   camera.distortion = k.distortion;
-  camera.distortion_model = k.model == DistortionModel::equidistant ? "equidistant" : "radtan";
+  camera.distortion_model = k.model;
   camera.mounting_height_m = mounting_height_m;
   return camera;
 }
@@ -25,7 +25,7 @@ CameraIntrinsics intrinsicsOf(const CameraConfig& c) {
   k.cx = c.cx;
   k.cy = c.cy;
   k.distortion = c.distortion;
-  k.model = c.distortion_model == "equidistant" ? DistortionModel::equidistant : DistortionModel::radtan;
+  k.model = c.distortion_model;
   return k;
 }
 

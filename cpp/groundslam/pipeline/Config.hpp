@@ -26,7 +26,7 @@ struct CameraConfig {
   double fx = 0.0, fy = 0.0;                ///< focal lengths, pixels (required)
   double cx = 0.0, cy = 0.0;                ///< principal point, pixels (required)
   std::array<double, 5> distortion{};       ///< OpenCV k1 k2 p1 p2 k3 (required); equidistant: k1 k2 k3 k4 0
-  std::string distortion_model = "radtan";  ///< radtan (OpenCV, ROS plumb_bob) | equidistant (fisheye)
+  DistortionModel distortion_model = DistortionModel::radtan;  ///< radtan (OpenCV, ROS plumb_bob) | equidistant (fisheye)
   double mounting_height_m = 0.25;          ///< used when T_robot_camera is absent (required)
   std::optional<std::array<double, 16>> T_robot_camera;  ///< row-major 4x4, overrides the default mount
 };
@@ -112,6 +112,9 @@ constexpr Range kNonNegative{0.0, std::numeric_limits<double>::infinity(), false
 
 /// Allowed values of a string field; empty: any string.
 using Choices = std::vector<std::string>;
+/// The constraint of an enum field: one of its values, each of which has a name in the YAML files (the names
+/// are the readers' business: io/ConfigNames.hpp).
+struct OneOfNames {};
 
 /// The camera section describing a camera with the default straight-down mount at `mounting_height_m`.
 CameraConfig cameraConfigOf(const CameraIntrinsics& intrinsics, double mounting_height_m);
@@ -147,7 +150,7 @@ void visitConfigFields(Config_& c, Visitor&& v) {
   v("camera", "cx", c.camera.cx, Range{});
   v("camera", "cy", c.camera.cy, Range{});
   v("camera", "distortion", c.camera.distortion, Range{});
-  v("camera", "distortion_model", c.camera.distortion_model, Choices{"radtan", "equidistant"});
+  v("camera", "distortion_model", c.camera.distortion_model, OneOfNames{});
   v("camera", "mounting_height_m", c.camera.mounting_height_m, kPositive);
   v("camera", "T_robot_camera", c.camera.T_robot_camera, Range{});
   v("dataset", "map_meters_per_pixel", c.dataset.map_meters_per_pixel, kPositive);
@@ -157,17 +160,17 @@ void visitConfigFields(Config_& c, Visitor&& v) {
   v("features", "fast_threshold", c.features.fast_threshold, Range{1, 255});
   v("features", "patch_size", c.features.patch_size, Range{3, 255});
   v("features", "edge_threshold", c.features.edge_threshold, Range{0, 255});
-  v("features", "score_type", c.features.score_type, Choices{"harris", "fast"});
+  v("features", "score_type", c.features.score_type, OneOfNames{});
   v("features", "near_twin_max_distance", c.features.near_twin_max_distance, Range{0, 256});
   v("features", "subpixel_window", c.features.subpixel_window, Range{0, 15});
   v("features", "flatten_window", c.features.flatten_window, Range{0.0, 1.0});
   v("features", "flatten_min_range", c.features.flatten_min_range, Range{0.0, 255.0});
   v("features", "max_extraction_width", c.features.max_extraction_width, Range{0, 100000});
   v("matching", "ratio", c.matching.ratio, Range{0.0, 1.0, true});
-  v("matching", "method", c.matching.method, Choices{"brute_force", "lsh"});
+  v("matching", "method", c.matching.method, OneOfNames{});
   v("matching", "guided_odometry_radius_m", c.matching.guided_odometry_radius_m, kNonNegative);
   v("matching", "guided_min_inlier_fraction", c.matching.guided_min_inlier_fraction, Range{0.0, 1.0});
-  v("odometry", "loss", c.odometry.loss, Choices{"huber", "cauchy", "geman_mcclure"});
+  v("odometry", "loss", c.odometry.loss, OneOfNames{});
   v("odometry", "loss_scale_m", c.odometry.loss_scale_m, kPositive);
   v("odometry", "min_inliers", c.odometry.min_inliers, Range{3, 100000});
   v("odometry", "ransac_inlier_m", c.odometry.ransac_inlier_m, kPositive);

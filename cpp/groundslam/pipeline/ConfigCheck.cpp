@@ -25,6 +25,8 @@ class RangeChecker {
   }
   void check(const std::string& name, int value, const Range& range) { check(name, static_cast<double>(value), range); }
   void check(const std::string&, bool, const Range&) {}
+  template <class Enum>
+  void check(const std::string&, Enum, const OneOfNames&) {}  // any value of the enum
   void check(const std::string& name, const std::string& value, const Choices& choices) {
     if (choices.empty() || std::find(choices.begin(), choices.end(), value) != choices.end()) return;
     std::string allowed;
