@@ -63,7 +63,7 @@ void evaluateRun(const EvaluateOptions& o) {
   std::cout << metricsToText(metrics);
   LoopClosureMetrics loops;
   if (fs::exists(run / "candidates.csv")) {
-    const Config config = loadConfig({(run / "config.yaml").string()});
+    const Config config = loadConfig({(run / "config.yaml").string()}).config;
     const auto candidates = readCandidatesCsv((run / "candidates.csv").string());
     std::vector<double> timestamps;
     for (const auto& p : estimate) timestamps.push_back(p.timestamp);

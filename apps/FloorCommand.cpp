@@ -48,7 +48,7 @@ double timeExtraction(const Dataset& dataset, const char* label, Extract&& extra
 void measureFloor(const FloorOptions& o) {
   const Dataset dataset = openDataset(o.dataset);
   if (dataset.isVideo()) throw InputError(dataset.source + ": `floor` reads image datasets (a video or camera: groundslam run)");
-  const Config config = loadDatasetConfig(dataset.camera_yaml, o.config);
+  const Config config = loadDatasetConfig(dataset.camera_yaml, o.config).config;
   cv::setNumThreads(1);
   const int width = config.camera.image_width, height = config.camera.image_height;
   // The reference: a plain decode and OpenCV's ORB with its defaults (1000 features, 8 levels, FAST

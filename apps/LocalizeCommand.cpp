@@ -96,13 +96,14 @@ std::string accuracySummary(const std::vector<Localized>& rows, const Trajectory
 void localize(const LocalizeOptions& o) {
   const Dataset dataset = openDataset(o.dataset);
   if (dataset.isVideo()) throw InputError(dataset.source + ": `localize` reads image datasets (a video or camera: groundslam run)");
-  const Config config = loadDatasetConfig(dataset.camera_yaml, o.config, o.calibration);
-  const auto vocabulary = loadVocabulary(config);
+  const RunSettings settings = loadDatasetConfig(dataset.camera_yaml, o.config, o.calibration);
+  const Config& config = settings.config;
+  const auto vocabulary = loadVocabulary(settings.inputs);
   const FeatureMap map = readMap(o.map, vocabulary);
   const std::string target = o.out_dir.empty() ? newRunFolderName("runs") : o.out_dir;
-  RunFolder folder(target, {o.dataset, o.config, dataset.camera_yaml.value_or(""), o.map, vocabularyPath(config)});
+  RunFolder folder(target, {o.dataset, o.config, dataset.camera_yaml.value_or(""), o.map, vocabularyPath(settings.inputs)});
   installStopHandlers();
-  writeNewFile(folder.path("config.yaml"), configToYaml(config));
+  writeNewFile(folder.path("config.yaml"), configToYaml(settings));
   const FramePreparer preparer(config);
   std::vector<Localized> rows;
   Trajectory localized;
@@ -128,12 +129,12 @@ void localize(const LocalizeOptions& o) {
   std::cout << "localized " << localized.size() << " of " << rows.size() << " images on a map of " << map.features().size()
             << " features (median " << (ms.empty() ? 0.0 : ms[ms.size() / 2]) << " ms per localization, decoding and ORB excluded)\n";
   if (dataset.hasGroundTruth()) {
-    const Trajectory groundtruth = groundTruthOf(dataset, config);
+    const Trajectory groundtruth = groundTruthOf(dataset, config.camera, settings.inputs.map_meters_per_pixel);
     writeNewFile(folder.path("groundtruth.tum"), formatTum(groundtruth));
     std::cout << accuracySummary(rows, groundtruth);
   }
   const bool interrupted = rows.size() < dataset.frames.size();
-  writeNewFile(folder.path("run.yaml"), runStatusYaml("localize", rows.size(), dataset.frames.size(), o.dataset, vocabularyPath(config)));
+  writeNewFile(folder.path("run.yaml"), runStatusYaml("localize", rows.size(), dataset.frames.size(), o.dataset, vocabularyPath(settings.inputs)));
   const std::string where = interrupted ? folder.commitPartial() : folder.commit();
   if (o.out_dir.empty()) pointLatestAt("runs", where);
   std::cout << "results in " << where << "\n";

@@ -44,10 +44,10 @@ struct RunProgress {
   bool interrupted() const { return processed < total; }
 };
 
-Config loadRunConfig(const Dataset& dataset, const RunOptions& o) {
-  Config config = loadDatasetConfig(dataset.camera_yaml, o.config, o.calibration);
-  if (o.no_loop_closure) config.loop_closure.enabled = false;
-  return config;
+RunSettings loadRunSettings(const Dataset& dataset, const RunOptions& o) {
+  RunSettings settings = loadDatasetConfig(dataset.camera_yaml, o.config, o.calibration);
+  if (o.no_loop_closure) settings.config.loop_closure.enabled = false;
+  return settings;
 }
 
 /// Runs the frames through the pipeline until the last one or a stop signal, with a progress line on a
@@ -67,15 +67,16 @@ std::vector<FrameResult> processAll(const Dataset& dataset, const Config& config
 }
 
 /// Runs SLAM on the dataset and writes every result file into `folder`, a fresh folder of this run's own.
-RunProgress runInto(const std::string& folder, const RunOptions& o, const Dataset& dataset, const Config& config) {
+RunProgress runInto(const std::string& folder, const RunOptions& o, const Dataset& dataset, const RunSettings& settings) {
   const auto file = [&](const char* name) { return (fs::path(folder) / name).string(); };
-  const std::shared_ptr<const Vocabulary> vocabulary = config.loop_closure.enabled ? loadVocabulary(config) : nullptr;
+  const Config& config = settings.config;
+  const std::shared_ptr<const Vocabulary> vocabulary = config.loop_closure.enabled ? loadVocabulary(settings.inputs) : nullptr;
   Slam slam(config, vocabulary);
   if (!o.map.empty()) {
     if (!vocabulary) throw InputError("--map " + o.map + ": a prior map needs loop closure (drop --no-loop-closure)");
     slam.usePriorMap(readMap(o.map, vocabulary));
   }
-  writeNewFile(file("config.yaml"), configToYaml(config));
+  writeNewFile(file("config.yaml"), configToYaml(settings));
   std::vector<double> load_ms;
   const std::vector<FrameResult> results = processAll(dataset, config, slam, load_ms);
   // A video's or camera's length is what was read (an interrupted stream is still a complete run of it).
@@ -93,7 +94,7 @@ RunProgress runInto(const std::string& folder, const RunOptions& o, const Datase
             << countStatus(results, FrameStatus::lost) << " lost (tracking lost, not yet relocalized), " << countStatus(results, FrameStatus::relocalized)
             << " relocalizations, " << countLoopClosures(results) << " loop closures\n";
   std::vector<std::optional<CandidateTruth>> truths;
-  const Trajectory groundtruth = dataset.hasGroundTruth() ? groundTruthOf(dataset, config) : Trajectory{};
+  const Trajectory groundtruth = dataset.hasGroundTruth() ? groundTruthOf(dataset, config.camera, settings.inputs.map_meters_per_pixel) : Trajectory{};
   if (dataset.hasGroundTruth() && groundtruth.empty()) {
     std::cout << "no metrics: every pose line of " << dataset.source << " is marked unreliable\n";
   } else if (!groundtruth.empty()) {
@@ -109,14 +110,14 @@ RunProgress runInto(const std::string& folder, const RunOptions& o, const Datase
   writeNewFile(file("candidates.csv"), formatCandidatesCsv(slam.loopCandidates(), truths));
   writeNewFile(file("trajectory.tum"), formatTum(trajectory));
   writeNewFile(file("run.yaml"), runStatusYaml("run", progress.processed, progress.total, o.dataset,
-                                                  config.loop_closure.enabled ? vocabularyPath(config) : ""));  // last: its status says whether the run finished
+                                                  config.loop_closure.enabled ? vocabularyPath(settings.inputs) : ""));  // last: its status says whether the run finished
   return progress;
 }
 
 /// Every file the run reads: none may lie inside the output folder that the run replaces.
-std::vector<std::string> runInputs(const RunOptions& o, const Dataset& dataset, const Config& config) {
+std::vector<std::string> runInputs(const RunOptions& o, const Dataset& dataset, const RunSettings& settings) {
   std::vector<std::string> inputs = {o.dataset, o.config, dataset.camera_yaml.value_or(""), o.map};
-  if (config.loop_closure.enabled) inputs.push_back(vocabularyPath(config));
+  if (settings.config.loop_closure.enabled) inputs.push_back(vocabularyPath(settings.inputs));
   return inputs;
 }
 
@@ -124,11 +125,11 @@ void run(const RunOptions& o) {
   if (o.dataset.empty() == (o.camera < 0)) throw InputError("give either DATASET or --camera N");
   Dataset dataset = o.camera >= 0 ? openCameraDevice(o.camera, std::nullopt) : openDataset(o.dataset);
   selectFrames(dataset, o.start, o.stop, o.every);
-  const Config config = loadRunConfig(dataset, o);
+  const RunSettings settings = loadRunSettings(dataset, o);
   const std::string target = o.out_dir.empty() ? newRunFolderName("runs") : o.out_dir;
-  RunFolder folder(target, runInputs(o, dataset, config));
+  RunFolder folder(target, runInputs(o, dataset, settings));
   installStopHandlers();
-  RunProgress progress = runInto(folder.stagingFolder(), o, dataset, config);
+  RunProgress progress = runInto(folder.stagingFolder(), o, dataset, settings);
   if (o.report && !progress.interrupted()) {
     if (!o.no_loop_closure) {
       RunOptions odometry = o;
@@ -137,7 +138,7 @@ void run(const RunOptions& o) {
       const std::string odometry_folder = folder.path("odometry");
       fs::create_directory(odometry_folder);
       std::cout << "odometry-only run for the report:\n";
-      const RunProgress odometry_progress = runInto(odometry_folder, odometry, dataset, loadRunConfig(dataset, odometry));
+      const RunProgress odometry_progress = runInto(odometry_folder, odometry, dataset, loadRunSettings(dataset, odometry));
       if (odometry_progress.interrupted()) progress.processed = std::min(progress.processed, odometry_progress.processed);
     }
     if (!progress.interrupted() && stopSignal() == 0) writeReport(folder.stagingFolder(), "");

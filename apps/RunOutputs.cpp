@@ -46,13 +46,9 @@ std::string runMetricsJson(const TrajectoryMetrics& trajectory, const LoopClosur
   return json;
 }
 
-std::string vocabularyPath(const Config& config) {
-  return config.loop_closure.vocabulary.empty() ? defaultVocabularyPath() : config.loop_closure.vocabulary;
-}
-
-std::shared_ptr<const Vocabulary> loadVocabulary(const Config& config) {
+std::shared_ptr<const Vocabulary> loadVocabulary(const InputSettings& inputs) {
   try {
-    return std::make_shared<const Vocabulary>(readVocabulary(vocabularyPath(config)));
+    return std::make_shared<const Vocabulary>(readVocabulary(vocabularyPath(inputs)));
   } catch (const InputError& e) {
     throw InputError(std::string("key 'loop_closure.vocabulary': ") + e.what());
   }

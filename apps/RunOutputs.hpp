@@ -7,6 +7,7 @@
 #include "groundslam/eval/LoopClosureMetrics.hpp"
 #include "groundslam/eval/TrajectoryMetrics.hpp"
 #include "groundslam/bow/Vocabulary.hpp"
+#include "groundslam/io/ConfigYaml.hpp"
 #include "groundslam/pipeline/Config.hpp"
 #include "groundslam/pipeline/FrameResult.hpp"
 
@@ -19,10 +20,9 @@ int countStatus(const std::vector<FrameResult>& results, FrameStatus status);
 int countLoopClosures(const std::vector<FrameResult>& results);
 /// `metrics.json`: the trajectory metrics with the loop-closure metrics under "loop_closure".
 std::string runMetricsJson(const TrajectoryMetrics& trajectory, const LoopClosureMetrics& loops);
-/// The vocabulary a configuration names (`loop_closure.vocabulary`), or the shipped one.
-std::string vocabularyPath(const Config& config);
-/// Reads that vocabulary; errors name the key. Throws InputError.
-std::shared_ptr<const Vocabulary> loadVocabulary(const Config& config);
+/// Reads the vocabulary the settings name (`loop_closure.vocabulary`, else the shipped one); errors name the
+/// key. Throws InputError.
+std::shared_ptr<const Vocabulary> loadVocabulary(const InputSettings& inputs);
 /// `run.yaml` of a run folder: `status: complete` or `interrupted`, frames processed and in the dataset.
 /// `run.yaml`: whether the run finished, the dataset and the vocabulary file used (empty: none).
 std::string runStatusYaml(const std::string& what, size_t processed, size_t total, const std::string& dataset,

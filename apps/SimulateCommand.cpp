@@ -122,8 +122,8 @@ void simulate(SimulateOptions& o) {
   if (fs::exists(fs::path(o.out_dir) / "simulation.yaml", error)) fs::remove_all(fs::path(o.out_dir) / "images", error);
   fs::create_directories(fs::path(o.out_dir) / "images");
 
-  Config config;
-  config.camera = cameraConfigOf(settings.camera, settings.mounting_height_m);
+  RunSettings camera_file;  // camera.yaml: the camera section, and the dataset section's map scale (default)
+  camera_file.config.camera = cameraConfigOf(settings.camera, settings.mounting_height_m);
   const double meters_per_pixel = settings.mounting_height_m / settings.camera.fx;
   std::vector<std::string> images;
   std::vector<Eigen::Matrix3d> homographies;
@@ -158,7 +158,7 @@ void simulate(SimulateOptions& o) {
     progress.update(i + 1);
   }
   progress.finish();
-  writeFileAtomically((fs::path(o.out_dir) / "camera.yaml").string(), configToYaml(config, {"camera", "dataset"}));
+  writeFileAtomically((fs::path(o.out_dir) / "camera.yaml").string(), configToYaml(camera_file, {"camera", "dataset"}));
   writeTum((fs::path(o.out_dir) / "groundtruth.tum").string(), groundtruth);
   // The frames' times, as groundtruth.tum has them (list indices): a dataset's timestamps.txt wins over
   // numeric file names, which after dropped frames or gaps would skip numbers.

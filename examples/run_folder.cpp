@@ -12,12 +12,12 @@ int main(int argc, char** argv) {
   }
   try {
     const groundslam::Dataset dataset = groundslam::openDataset(argv[1]);
-    const groundslam::Config config = groundslam::loadDatasetConfig(dataset.camera_yaml, argc > 2 ? argv[2] : "");
-    const std::string vocabulary_path =
-        config.loop_closure.vocabulary.empty() ? groundslam::defaultVocabularyPath() : config.loop_closure.vocabulary;
-    auto vocabulary = std::make_shared<const groundslam::Vocabulary>(groundslam::readVocabulary(vocabulary_path));
-    groundslam::Slam slam(config, vocabulary);
-    const groundslam::RunnerOutput output = groundslam::runDataset(dataset, config, slam);
+    // The dataset's camera.yaml, the optional file over it: the pipeline's config and the vocabulary's path.
+    const groundslam::RunSettings settings = groundslam::loadDatasetConfig(dataset.camera_yaml, argc > 2 ? argv[2] : "");
+    auto vocabulary = std::make_shared<const groundslam::Vocabulary>(
+        groundslam::readVocabulary(groundslam::vocabularyPath(settings.inputs)));
+    groundslam::Slam slam(settings.config, vocabulary);
+    const groundslam::RunnerOutput output = groundslam::runDataset(dataset, settings.config, slam);
     std::cout << groundslam::formatTum(slam.trajectory());
     std::cerr << "run_folder: " << output.results.size() << " frames\n";
   } catch (const std::exception& e) {

@@ -58,7 +58,7 @@ TEST(Calibration, ReadsRosCameraInfoAndKalibrWithFisheye) {
   // Over a camera.yaml that gives only the mount: intrinsics from the calibration, the mount kept.
   writeText(dir / "camera.yaml", "camera:\n  image_width: 1\n  image_height: 1\n  fx: 1\n  fy: 1\n  cx: 0\n  cy: 0\n"
                                  "  distortion: [0, 0, 0, 0, 0]\n  mounting_height_m: 0.3\n");
-  const Config config = loadDatasetConfig((dir / "camera.yaml").string(), "", (dir / "camchain.yaml").string());
+  const Config config = loadDatasetConfig((dir / "camera.yaml").string(), "", (dir / "camchain.yaml").string()).config;
   EXPECT_EQ(config.camera.image_width, 640);
   EXPECT_DOUBLE_EQ(config.camera.fy, 401.0);
   EXPECT_EQ(config.camera.distortion_model, DistortionModel::equidistant);

@@ -24,7 +24,7 @@ dataset:
   map_meters_per_pixel: null
 )";
 
-Config load(const std::string& text) {
+RunSettings load(const std::string& text) {
   ConfigLoader loader;
   loader.applyText(text, "test.yaml");
   return loader.finish();
@@ -33,36 +33,41 @@ Config load(const std::string& text) {
 }  // namespace
 
 TEST(ConfigYaml, ReadsTheConventionsCameraFile) {
-  const Config c = load(kCameraYaml);
+  const RunSettings settings = load(kCameraYaml);
+  const Config& c = settings.config;
   EXPECT_EQ(c.camera.image_width, 1600);
   EXPECT_DOUBLE_EQ(c.camera.fx, 2195.70853);
   EXPECT_DOUBLE_EQ(c.camera.cy, 606.242723);
-  EXPECT_FALSE(c.dataset.map_meters_per_pixel.has_value());
+  EXPECT_FALSE(settings.inputs.map_meters_per_pixel.has_value());
+  EXPECT_EQ(settings.inputs.vocabulary, "");
   EXPECT_FALSE(c.camera.T_robot_camera.has_value());
   EXPECT_EQ(c.features.num_features, OrbSettings{}.num_features);  // defaults kept
 }
 
 TEST(ConfigYaml, WrittenConfigReadsBackIdentically) {
-  Config c = load(kCameraYaml);
+  RunSettings settings = load(kCameraYaml);
+  Config& c = settings.config;
   c.camera.distortion = {0.1, -0.2, 0.001, 0.002, 0.05};
   c.camera.T_robot_camera = std::array<double, 16>{1, 0, 0, 0.1, 0, -1, 0, 0, 0, 0, -1, 0.3, 0, 0, 0, 1};
-  c.dataset.map_meters_per_pixel = 1.25e-4;
+  settings.inputs.map_meters_per_pixel = 1.25e-4;
+  settings.inputs.vocabulary = "/data/floor.gslmvoc";
   c.matching.ratio = 0.55;
   c.odometry.loss = RobustLoss::cauchy;
-  const std::string text = configToYaml(c);
-  const Config back = load(text);
+  const std::string text = configToYaml(settings);
+  const RunSettings back = load(text);
   EXPECT_EQ(configToYaml(back), text);
-  EXPECT_EQ(back.camera.distortion, c.camera.distortion);
-  EXPECT_EQ(*back.camera.T_robot_camera, *c.camera.T_robot_camera);
-  EXPECT_DOUBLE_EQ(*back.dataset.map_meters_per_pixel, 1.25e-4);
-  EXPECT_EQ(back.odometry.loss, RobustLoss::cauchy);
+  EXPECT_EQ(back.config.camera.distortion, c.camera.distortion);
+  EXPECT_EQ(*back.config.camera.T_robot_camera, *c.camera.T_robot_camera);
+  EXPECT_DOUBLE_EQ(*back.inputs.map_meters_per_pixel, 1.25e-4);
+  EXPECT_EQ(back.inputs.vocabulary, "/data/floor.gslmvoc");
+  EXPECT_EQ(back.config.odometry.loss, RobustLoss::cauchy);
 }
 
 TEST(ConfigYaml, LaterLayersOverrideEarlierOnes) {
   ConfigLoader loader;
   loader.applyText(kCameraYaml, "camera.yaml");
   loader.applyText("matching:\n  ratio: 0.6\ncamera:\n  fx: 1000\n", "override.yaml");
-  const Config c = loader.finish();
+  const Config c = loader.finish().config;
   EXPECT_DOUBLE_EQ(c.matching.ratio, 0.6);
   EXPECT_DOUBLE_EQ(c.camera.fx, 1000.0);
   EXPECT_DOUBLE_EQ(c.camera.fy, 2195.56073);
@@ -100,7 +105,7 @@ TEST(ConfigYaml, EnumValuesAreReadByName) {
   loader.applyText(kCameraYaml, "camera.yaml");
   loader.applyText("camera:\n  distortion_model: equidistant\nfeatures:\n  score_type: fast\nmatching:\n  method: lsh\n"
                    "odometry:\n  loss: geman_mcclure\n", "names.yaml");
-  const Config c = loader.finish();
+  const Config c = loader.finish().config;
   EXPECT_EQ(c.camera.distortion_model, DistortionModel::equidistant);
   EXPECT_EQ(c.features.score_type, OrbScore::fast);
   EXPECT_EQ(c.matching.method, MatcherMethod::lsh);
@@ -127,11 +132,11 @@ TEST(ConfigYaml, MissingFileAndBrokenYamlAreNamed) {
 }
 
 TEST(ConfigYaml, ShippedDefaultFileMatchesTheDefaultsInCode) {
-  const Config shipped = loadConfig({std::string(GROUNDSLAM_SOURCE_DIR) + "/config/default.yaml"});
-  Config expected;
-  expected.camera = shipped.camera;  // the file shows HD Ground's camera; the rest must be the defaults
+  const RunSettings shipped = loadConfig({std::string(GROUNDSLAM_SOURCE_DIR) + "/config/default.yaml"});
+  RunSettings expected;
+  expected.config.camera = shipped.config.camera;  // the file shows HD Ground's camera; the rest must be the defaults
   EXPECT_EQ(configToYaml(shipped), configToYaml(expected));
-  EXPECT_DOUBLE_EQ(shipped.camera.fx, 2195.70853);
+  EXPECT_DOUBLE_EQ(shipped.config.camera.fx, 2195.70853);
   // Every key is in the file, written as groundslam writes it (comment lines aside), and has a comment.
   std::ifstream file(std::string(GROUNDSLAM_SOURCE_DIR) + "/config/default.yaml");
   std::string text, line;

@@ -54,7 +54,7 @@ TEST(EndToEnd, OdometryOnAPerturbedSequenceStaysAccurate) {
             "optimise_ms,total_ms,odometry_x_m,odometry_y_m,odometry_theta_deg,still_matches,artifact_cells,roll_deg,pitch_deg,"
             "height_m,mount_estimated");
   EXPECT_EQ(frames.find("fallback"), std::string::npos) << "odometry must keep every frame";
-  const Config config = loadConfig({(run / "config.yaml").string()});  // the effective config reads back
+  const Config config = loadConfig({(run / "config.yaml").string()}).config;  // the effective config reads back
   EXPECT_EQ(config.camera.image_width, 320);
   const std::string metrics = readTextFile((run / "metrics.json").string());
   EXPECT_DOUBLE_EQ(jsonNumber(metrics, "fraction_estimated"), 1.0);

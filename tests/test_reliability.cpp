@@ -110,7 +110,7 @@ TEST(CraftedConfig, SlamRefusesAConfigurationBuiltInCodeWithTheKeyNamed) {
   } catch (const std::invalid_argument& e) {
     EXPECT_EQ(std::string(e.what()).rfind("camera.image_width: value 0 out of range", 0), 0u) << e.what();
   }
-  config = loadConfig({dataFile("config/camera.yaml")});
+  config = loadConfig({dataFile("config/camera.yaml")}).config;
   config.camera.fx = std::numeric_limits<double>::infinity();
   EXPECT_NE(inputErrorOf([&] { Slam slam(config, nullptr); }).find("camera.fx: value inf is not a finite number"), std::string::npos);
 }
@@ -119,8 +119,8 @@ TEST(CraftedConfig, RelativeVocabularyIsFoundBesideItsConfigFile) {
   const fs::path dir = scratchDir();
   fs::create_directories(dir / "configs");
   writeText(dir / "configs" / "lc.yaml", "loop_closure:\n  vocabulary: ../vocab/floor.gslmvoc\n");
-  const Config config = loadConfig({dataFile("config/camera.yaml"), (dir / "configs" / "lc.yaml").string()});
-  EXPECT_EQ(config.loop_closure.vocabulary, fs::absolute(dir / "vocab" / "floor.gslmvoc").lexically_normal().string());
+  const RunSettings settings = loadConfig({dataFile("config/camera.yaml"), (dir / "configs" / "lc.yaml").string()});
+  EXPECT_EQ(settings.inputs.vocabulary, fs::absolute(dir / "vocab" / "floor.gslmvoc").lexically_normal().string());
 }
 
 TEST(CraftedList, PoseMatricesThatAreNoPoseAreRefusedWithTheirLine) {

@@ -35,7 +35,7 @@ TEST(Simulator, SequenceReadsBackThroughTheHdGroundReaderExactly) {
             0);
   const Dataset dataset = openDataset((dir / "sequence.txt").string());
   ASSERT_TRUE(dataset.camera_yaml.has_value());
-  const Config config = loadConfig({*dataset.camera_yaml});
+  const Config config = loadConfig({*dataset.camera_yaml}).config;
   EXPECT_EQ(config.camera.image_width, 160);
   const double s = config.camera.mounting_height_m / config.camera.fx;
   const auto truth = readTum((dir / "groundtruth.tum").string());

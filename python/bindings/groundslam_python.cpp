@@ -49,10 +49,9 @@ py::array_t<double> trajectoryArray(const Trajectory& trajectory) {
   return out;
 }
 
-std::shared_ptr<const Vocabulary> vocabularyFor(const Config& config) {
-  if (!config.loop_closure.enabled) return nullptr;
-  const std::string path = config.loop_closure.vocabulary.empty() ? defaultVocabularyPath() : config.loop_closure.vocabulary;
-  return std::make_shared<const Vocabulary>(readVocabulary(path));
+std::shared_ptr<const Vocabulary> vocabularyFor(const RunSettings& settings) {
+  if (!settings.config.loop_closure.enabled) return nullptr;
+  return std::make_shared<const Vocabulary>(readVocabulary(vocabularyPath(settings.inputs)));
 }
 
 /// The simulator with the settings it was built from.
@@ -74,7 +73,7 @@ void checkSize(const GrayArray& image, const Config& config) {
 /// Slam with the vocabulary it was built with (maps are read with it). One call at a time: the GIL is released
 /// while an image is processed, so the object's own lock keeps other Python threads out.
 struct PySlam {
-  explicit PySlam(const Config& c) : config(c), vocabulary(vocabularyFor(c)), slam(c, vocabulary) {}
+  explicit PySlam(const RunSettings& s) : config(s.config), vocabulary(vocabularyFor(s)), slam(s.config, vocabulary) {}
   Config config;
   std::shared_ptr<const Vocabulary> vocabulary;
   Slam slam;
@@ -83,8 +82,8 @@ struct PySlam {
 
 /// A saved map with what localizing an image on it needs.
 struct PyMap {
-  PyMap(const std::string& path, const Config& c)
-      : config(c), vocabulary(vocabularyFor(c)), map(readMap(path, requireVocabulary(vocabulary))), preparer(c) {}
+  PyMap(const std::string& path, const RunSettings& s)
+      : config(s.config), vocabulary(vocabularyFor(s)), map(readMap(path, requireVocabulary(vocabulary))), preparer(s.config) {}
   static std::shared_ptr<const Vocabulary> requireVocabulary(std::shared_ptr<const Vocabulary> v) {
     if (!v) throw std::invalid_argument("Map: needs loop closure on in the configuration (its vocabulary reads the map)");
     return v;
@@ -124,19 +123,24 @@ PYBIND11_MODULE(groundslam, m) {
       .def_readwrite("mounting_height_m", &CameraConfig::mounting_height_m)
       .def_readwrite("T_robot_camera", &CameraConfig::T_robot_camera);
 
-  py::class_<Config>(m, "Config", "Every setting of the pipeline (the defaults of config/default.yaml)")
+  // Python's Config is what a configuration file sets: the pipeline's settings and the vocabulary's path.
+  py::class_<RunSettings>(m, "Config", "Every setting of the pipeline (the defaults of config/default.yaml)")
       .def(py::init<>())
       .def_static("from_yaml", [](const std::string& path) { return loadConfig({path}); }, py::arg("path"),
                   "Reads a configuration YAML (e.g. a dataset's camera.yaml, or one with every section)")
-      .def_readwrite("camera", &Config::camera)
       .def_property(
-          "loop_closure_enabled", [](const Config& c) { return c.loop_closure.enabled; },
-          [](Config& c, bool on) { c.loop_closure.enabled = on; })
+          "camera",  // a reference: `config.camera.fx = ...` changes this configuration
+          py::cpp_function([](RunSettings& s) -> CameraConfig& { return s.config.camera; }, py::return_value_policy::reference_internal),
+          [](RunSettings& s, const CameraConfig& camera) { s.config.camera = camera; })
       .def_property(
-          "vocabulary", [](const Config& c) { return c.loop_closure.vocabulary; },
-          [](Config& c, const std::string& path) { c.loop_closure.vocabulary = path; })
-      .def("validate", &validateConfig, "Raises ValueError naming the key when a value cannot be used")
-      .def("to_yaml", [](const Config& c) { return configToYaml(c); });
+          "loop_closure_enabled", [](const RunSettings& s) { return s.config.loop_closure.enabled; },
+          [](RunSettings& s, bool on) { s.config.loop_closure.enabled = on; })
+      .def_property(
+          "vocabulary", [](const RunSettings& s) { return s.inputs.vocabulary; },
+          [](RunSettings& s, const std::string& path) { s.inputs.vocabulary = path; }, "vocabulary file; empty: the shipped one")
+      .def("validate", [](const RunSettings& s) { validateConfig(s.config); },
+           "Raises ValueError naming the key when a value cannot be used")
+      .def("to_yaml", [](const RunSettings& s) { return configToYaml(s); });
 
   py::class_<FrameResult>(m, "FrameResult", "What the pipeline reports for one frame")
       .def_readonly("index", &FrameResult::index)
@@ -150,7 +154,7 @@ PYBIND11_MODULE(groundslam, m) {
       .def("__repr__", [](const FrameResult& r) { return "FrameResult(index=" + std::to_string(r.index) + ", status='" + r.statusName() + "')"; });
 
   py::class_<PySlam>(m, "Slam", "The SLAM pipeline, one image at a time")
-      .def(py::init<const Config&>(), py::arg("config"))
+      .def(py::init<const RunSettings&>(), py::arg("config"))
       .def(
           "process",
           [](PySlam& s, const GrayArray& image, double timestamp) {
@@ -213,7 +217,7 @@ PYBIND11_MODULE(groundslam, m) {
       .def_readonly("inliers", &Localization::inliers)
       .def_readonly("votes", &Localization::votes);
   py::class_<PyMap>(m, "Map", "A map written by a run (map.gsmap): images are localized on it one by one")
-      .def(py::init<const std::string&, const Config&>(), py::arg("path"), py::arg("config"))
+      .def(py::init<const std::string&, const RunSettings&>(), py::arg("path"), py::arg("config"))
       .def(
           "localize",
           [](const PyMap& map, const GrayArray& image) {
@@ -262,8 +266,8 @@ PYBIND11_MODULE(groundslam, m) {
         return trajectoryArray(truth);
       }, "N x 4: index, x, y, theta")
       .def("config", [](const PySimulator& s) {
-        Config config;
-        config.camera = cameraConfigOf(s.settings.camera, s.settings.mounting_height_m);
+        RunSettings config;
+        config.config.camera = cameraConfigOf(s.settings.camera, s.settings.mounting_height_m);
         return config;
       }, "A Config whose camera is the simulated one");
 }

@@ -9,12 +9,14 @@
 #include <filesystem>
 #include <limits>
 #include <fstream>
+#include <functional>
 #include <map>
 #include <sstream>
 #include <type_traits>
 
 #include <yaml-cpp/yaml.h>
 
+#include "groundslam/io/DataFiles.hpp"
 #include "groundslam/io/Files.hpp"
 #include "groundslam/io/InputError.hpp"
 
@@ -179,7 +181,8 @@ class FieldReader {
   std::map<std::string, std::set<std::string>> known_;
 };
 
-/// Writes every field into a YAML emitter, grouped by section.
+/// Writes every field into a YAML emitter, grouped by section: sections in the order they are first visited,
+/// each with its keys in the order visited.
 class FieldWriter {
  public:
   FieldWriter(YAML::Emitter& out, const std::vector<std::string>& only_sections)
@@ -191,17 +194,21 @@ class FieldWriter {
         std::find(only_sections_.begin(), only_sections_.end(), section) == only_sections_.end()) {
       return;
     }
-    if (section_ != section) {
-      if (!section_.empty()) out_ << YAML::EndMap;
-      section_ = section;
-      out_ << YAML::Key << section << YAML::Value << YAML::BeginMap;
-    }
-    out_ << YAML::Key << key << YAML::Value;
-    write(field);
+    auto found = std::find_if(sections_.begin(), sections_.end(), [&](const auto& s) { return s.first == section; });
+    if (found == sections_.end()) found = sections_.insert(sections_.end(), {section, {}});
+    found->second.push_back([this, key, &field] {
+      out_ << YAML::Key << key << YAML::Value;
+      write(field);
+    });
   }
 
+  /// Emits the sections collected; the fields visited must still be alive.
   void close() {
-    if (!section_.empty()) out_ << YAML::EndMap;
+    for (const auto& [section, keys] : sections_) {
+      out_ << YAML::Key << section << YAML::Value << YAML::BeginMap;
+      for (const auto& emit : keys) emit();
+      out_ << YAML::EndMap;
+    }
   }
 
  private:
@@ -235,7 +242,7 @@ class FieldWriter {
 
   YAML::Emitter& out_;
   const std::vector<std::string>& only_sections_;
-  std::string section_;
+  std::vector<std::pair<std::string, std::vector<std::function<void()>>>> sections_;
 };
 
 }  // namespace
@@ -255,7 +262,7 @@ void ConfigLoader::applyText(const std::string& yaml_text, const std::string& so
   if (!root.IsMap()) throw InputError(where(source, root) + ": expected a YAML mapping of sections (camera:, features:, ...)");
   try {
     FieldReader reader(root, source, set_keys_);
-    visitConfigFields(config_, reader);
+    visitSettingsFields(settings_, reader);
     reader.rejectUnknownKeys();
   } catch (const YAML::Exception& e) {
     throw InputError(source + ":" + std::to_string(e.mark.line + 1) + ": " + e.msg);
@@ -266,16 +273,16 @@ void ConfigLoader::applyFile(const std::string& path) {
   std::error_code error;
   if (!fs::exists(path, error)) throw InputError(path + ": no such configuration file");
   if (!fs::is_regular_file(path, error)) throw InputError(path + ": not a configuration file (a folder?)");
-  const std::string before = config_.loop_closure.vocabulary;
+  const std::string before = settings_.inputs.vocabulary;
   applyText(readTextFile(path), path);
   // A vocabulary named in a file is found beside that file, wherever the command runs.
-  std::string& vocabulary = config_.loop_closure.vocabulary;
+  std::string& vocabulary = settings_.inputs.vocabulary;
   if (vocabulary != before && !vocabulary.empty() && fs::path(vocabulary).is_relative()) {
     vocabulary = fs::absolute(fs::path(path).parent_path() / vocabulary).lexically_normal().string();
   }
 }
 
-Config ConfigLoader::finish() const {
+RunSettings ConfigLoader::finish() const {
   for (const auto& key : requiredConfigKeys()) {
     if (set_keys_.count(key)) continue;
     std::string sources;
@@ -283,22 +290,26 @@ Config ConfigLoader::finish() const {
     throw InputError("missing required key '" + key + "'" +
                      (sources.empty() ? std::string(" (no configuration file given)") : " in " + sources));
   }
-  if (const std::optional<ConfigProblem> problem = findConfigProblem(config_)) {
+  if (const std::optional<ConfigProblem> problem = findConfigProblem(settings_.config)) {
     const auto set_at = set_keys_.find(problem->key);
     const std::string place = set_at != set_keys_.end() ? set_at->second : "default value";
     throw InputError(place + ": key '" + problem->key + "': " + problem->message);
   }
-  return config_;
+  return settings_;
 }
 
-Config loadConfig(const std::vector<std::string>& paths) {
+std::string vocabularyPath(const InputSettings& inputs) {
+  return inputs.vocabulary.empty() ? defaultVocabularyPath() : inputs.vocabulary;
+}
+
+RunSettings loadConfig(const std::vector<std::string>& paths) {
   ConfigLoader loader;
   for (const auto& path : paths) loader.applyFile(path);
   return loader.finish();
 }
 
-Config loadDatasetConfig(const std::optional<std::string>& camera_yaml, const std::string& user_config,
-                         const std::string& calibration) {
+RunSettings loadDatasetConfig(const std::optional<std::string>& camera_yaml, const std::string& user_config,
+                              const std::string& calibration) {
   ConfigLoader loader;
   if (camera_yaml) loader.applyFile(*camera_yaml);
   if (!user_config.empty()) loader.applyFile(user_config);
@@ -316,12 +327,12 @@ Config loadDatasetConfig(const std::optional<std::string>& camera_yaml, const st
   return loader.finish();
 }
 
-std::string configToYaml(const Config& config, const std::vector<std::string>& only_sections) {
+std::string configToYaml(const RunSettings& settings, const std::vector<std::string>& only_sections) {
   YAML::Emitter out;
   out.SetNullFormat(YAML::LowerNull);  // `null`, as conventions.md writes it
   out << YAML::BeginMap;
   FieldWriter writer(out, only_sections);
-  visitConfigFields(config, writer);
+  visitSettingsFields(settings, writer);
   writer.close();
   out << YAML::EndMap;
   return std::string(out.c_str()) + "\n";

@@ -308,14 +308,13 @@ Eigen::Matrix3d mapHomographyFromRobotPose(const Pose2& T_world_robot, const Cam
   return world_to_map * T_world_robot.matrix() * pixel_to_robot;
 }
 
-Trajectory groundTruthOf(const Dataset& dataset, const Config& config) {
-  const double meters_per_pixel =
-      config.dataset.map_meters_per_pixel.value_or(config.camera.mounting_height_m / config.camera.fx);
+Trajectory groundTruthOf(const Dataset& dataset, const CameraConfig& camera, std::optional<double> map_meters_per_pixel) {
+  const double meters_per_pixel = map_meters_per_pixel.value_or(camera.mounting_height_m / camera.fx);
   Trajectory poses;
   for (const auto& frame : dataset.frames) {
     if (!frame.map_from_image || !frame.pose_reliable) continue;
-    poses.push_back({frame.timestamp, robotPoseFromMapHomography(*frame.map_from_image, config.camera.cx,
-                                                                 config.camera.cy, meters_per_pixel)});
+    poses.push_back({frame.timestamp, robotPoseFromMapHomography(*frame.map_from_image, camera.cx,
+                                                                 camera.cy, meters_per_pixel)});
   }
   return poses;
 }

@@ -75,9 +75,9 @@ Pose2 robotPoseFromMapHomography(const Eigen::Matrix3d& A, double cx, double cy,
 Eigen::Matrix3d mapHomographyFromRobotPose(const Pose2& T_world_robot, const CameraIntrinsics& intrinsics,
                                            double meters_per_pixel);
 
-/// The ground-truth robot poses of the frames whose pose line is reliable, converted as conventions.md says
-/// with the configuration's principal point and map scale.
-Trajectory groundTruthOf(const Dataset& dataset, const Config& config);
+/// The ground-truth robot poses of the frames whose pose line is reliable, converted as HD Ground's convention
+/// says with the camera's principal point and the map scale (empty: mounting_height_m / fx).
+Trajectory groundTruthOf(const Dataset& dataset, const CameraConfig& camera, std::optional<double> map_meters_per_pixel);
 
 /// Writes an HD Ground list: image paths (relative to the list's folder) and their A matrices.
 std::string formatHdGroundList(const std::vector<std::string>& relative_image_paths,

@@ -1,7 +1,8 @@
 #pragma once
-// The whole run configuration: one plain struct per component, defaults in code. Every field is
+// The pipeline's configuration: one plain struct per component, defaults in code. Every field is
 // listed once in visitConfigFields(), which the YAML reader and writer both walk, so a key cannot be
-// readable but not written, or written but not validated.
+// readable but not written, or written but not validated. What only the programs reading files need (the
+// vocabulary's path, a dataset's map scale) is not here but in io/ConfigYaml.hpp's InputSettings.
 
 #include <array>
 #include <limits>
@@ -29,10 +30,6 @@ struct CameraConfig {
   DistortionModel distortion_model = DistortionModel::radtan;  ///< radtan (OpenCV, ROS plumb_bob) | equidistant (fisheye)
   double mounting_height_m = 0.25;          ///< used when T_robot_camera is absent (required)
   std::optional<std::array<double, 16>> T_robot_camera;  ///< row-major 4x4, overrides the default mount
-};
-
-struct DatasetConfig {
-  std::optional<double> map_meters_per_pixel;  ///< HD Ground map scale; empty: mounting_height_m / fx
 };
 
 /// What odometry assumes when a frame cannot be matched (e.g. a textureless image): the previous
@@ -89,7 +86,6 @@ struct OutdoorConfig {
 
 struct Config {
   CameraConfig camera;
-  DatasetConfig dataset;
   OrbSettings features;
   MatcherSettings matching;
   FitSettings odometry;
@@ -153,7 +149,6 @@ void visitConfigFields(Config_& c, Visitor&& v) {
   v("camera", "distortion_model", c.camera.distortion_model, OneOfNames{});
   v("camera", "mounting_height_m", c.camera.mounting_height_m, kPositive);
   v("camera", "T_robot_camera", c.camera.T_robot_camera, Range{});
-  v("dataset", "map_meters_per_pixel", c.dataset.map_meters_per_pixel, kPositive);
   v("features", "num_features", c.features.num_features, Range{10, 100000});
   v("features", "scale_factor", c.features.scale_factor, Range{1.0, 4.0, true});
   v("features", "num_levels", c.features.num_levels, Range{1, 16});
@@ -180,7 +175,6 @@ void visitConfigFields(Config_& c, Visitor&& v) {
   v("odometry", "fallback_sigma_m", c.fallback.sigma_m, kPositive);
   v("odometry", "fallback_sigma_rad", c.fallback.sigma_rad, kPositive);
   v("loop_closure", "enabled", c.loop_closure.enabled, Range{});
-  v("loop_closure", "vocabulary", c.loop_closure.vocabulary, Choices{});
   v("loop_closure", "database_delay_frames", c.loop_closure.database_delay_frames, Range{1, 1e9});
   v("loop_closure", "max_candidates", c.loop_closure.max_candidates, Range{0, 1000});
   v("loop_closure", "max_nearby_places", c.loop_closure.max_nearby_places, Range{0, 100000});

@@ -32,7 +32,6 @@ constexpr int kMapSegment = 0;
 
 struct LoopClosureSettings {
   bool enabled = true;               ///< false: odometry only
-  std::string vocabulary;            ///< vocabulary file; empty: the default shipped with groundslam
   int database_delay_frames = 20;    ///< k: frame n-k enters the database when frame n arrives
   int max_candidates = 4;            ///< candidates near the estimate verified per frame, best BoW scores first
   int max_nearby_places = 16;        ///< the nearest places within reach are BoW-scored; the best become candidates
