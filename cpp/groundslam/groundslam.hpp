@@ -16,5 +16,6 @@
 #include "groundslam/io/VocabularyFile.hpp"
 #include "groundslam/pipeline/Config.hpp"
 #include "groundslam/pipeline/FrameResult.hpp"
+#include "groundslam/pipeline/PipelinedSlam.hpp"
 #include "groundslam/pipeline/Slam.hpp"
 #include "groundslam/sim/Simulator.hpp"
