@@ -11,6 +11,7 @@
 
 #include "groundslam/core/FeatureExtraction.hpp"
 #include "groundslam/core/Matching.hpp"
+#include "groundslam/core/NearestDescriptors.hpp"
 #include "groundslam/core/MountEstimation.hpp"
 #include "groundslam/core/StillFeatures.hpp"
 #include "groundslam/core/PoseGraph.hpp"
@@ -168,6 +169,19 @@ void matchWith(benchmark::State& state, MatcherMethod method) {
 void BM_MatchBruteForce(benchmark::State& state) { matchWith(state, MatcherMethod::brute_force); }
 void BM_MatchLsh(benchmark::State& state) { matchWith(state, MatcherMethod::lsh); }
 BENCHMARK(BM_MatchBruteForce)->Unit(benchmark::kMillisecond);
+
+/// The two nearest of 1500 x 1500 descriptors per kernel: 1 scalar (POPCNT), 2 AVX2, 3 AVX-512 VPOPCNTDQ.
+void BM_TwoNearest(benchmark::State& state) {
+  const auto kernel = static_cast<HammingKernel>(state.range(0));
+  const auto kernels = supportedHammingKernels();
+  if (std::find(kernels.begin(), kernels.end(), kernel) == kernels.end()) {
+    state.SkipWithError("this CPU lacks the kernel");
+    return;
+  }
+  const GroundFeatures a = groundFeatures(frames().first), b = groundFeatures(frames().second);
+  for (auto _ : state) benchmark::DoNotOptimize(twoNearest(b.descriptors, a.descriptors, kernel));
+}
+BENCHMARK(BM_TwoNearest)->DenseRange(1, 3)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_MatchLsh)->Unit(benchmark::kMillisecond);
 
 void BM_RobustFit(benchmark::State& state) {

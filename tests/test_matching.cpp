@@ -6,6 +6,7 @@
 
 #include "groundslam/core/FeatureExtraction.hpp"
 #include "groundslam/core/Matching.hpp"
+#include "groundslam/core/NearestDescriptors.hpp"
 #include "groundslam/io/ConfigNames.hpp"
 
 using namespace groundslam;
@@ -148,4 +149,44 @@ TEST(Matching, GuidedMatchingComparesOnlyNearbyFeatures) {
   EXPECT_TRUE(DescriptorMatcher({0.7, MatcherMethod::brute_force}).match(query.descriptors, train.descriptors).empty());
   // A prediction off by more than the radius finds nothing to compare with.
   EXPECT_TRUE(matchNearby(query, train, Pose2(0.3, 0.3, 0.0) * T_train_query, 0.004, 0.7).empty());
+}
+
+TEST(NearestDescriptors, EveryKernelGivesTheScalarAnswerWithTiesAndPartialBlocks) {
+  std::mt19937 rng(5);
+  std::vector<HammingKernel> kernels = supportedHammingKernels();
+  ASSERT_EQ(kernels.front(), HammingKernel::scalar);
+  for (const int train_rows : {1, 2, 7, 8, 9, 31, 1503}) {
+    cv::Mat train = randomDescriptors(train_rows, static_cast<unsigned>(11 + train_rows));
+    if (train_rows > 8) train.row(2).copyTo(train.row(train_rows - 1));  // an exact twin: tied distances
+    cv::Mat query;
+    for (int i = 0; i < 60; ++i) query.push_back(flipBits(train.row(i % train_rows), i % 40, rng));
+    query.push_back(randomDescriptors(20, 3));
+    const std::vector<TwoNearest> expected = twoNearest(query, train, HammingKernel::scalar);
+    for (const HammingKernel kernel : kernels) {
+      const std::vector<TwoNearest> got = twoNearest(query, train, kernel);
+      ASSERT_EQ(got.size(), expected.size());
+      for (size_t q = 0; q < got.size(); ++q) {
+        EXPECT_EQ(got[q].best, expected[q].best) << "kernel " << int(kernel) << " rows " << train_rows << " query " << q;
+        EXPECT_EQ(got[q].best_distance, expected[q].best_distance) << int(kernel) << " " << train_rows << " " << q;
+        EXPECT_EQ(got[q].second_distance, expected[q].second_distance) << int(kernel) << " " << train_rows << " " << q;
+      }
+    }
+    // A query equal to train row 0 finds it at distance 0; with one train row there is no second.
+    const TwoNearest own = twoNearest(train.row(0), train)[0];
+    EXPECT_EQ(own.best, 0);
+    EXPECT_EQ(own.best_distance, 0);
+    if (train_rows == 1) {
+      EXPECT_EQ(own.second_distance, 257);
+    }
+  }
+  // The twin: row 2 and the last row of the 1503-row set are equal; the lower row wins, the second is the tie.
+  const cv::Mat train = randomDescriptors(1503, 11 + 1503);
+  cv::Mat with_twin = train.clone();
+  train.row(2).copyTo(with_twin.row(1502));
+  for (const HammingKernel kernel : kernels) {
+    const TwoNearest n = twoNearest(train.row(2), with_twin, kernel)[0];
+    EXPECT_EQ(n.best, 2) << int(kernel);
+    EXPECT_EQ(n.best_distance, 0) << int(kernel);
+    EXPECT_EQ(n.second_distance, 0) << int(kernel);
+  }
 }

@@ -1,5 +1,7 @@
 #include "groundslam/core/Matching.hpp"
 
+#include "groundslam/core/NearestDescriptors.hpp"
+
 #include "groundslam/core/Hamming.hpp"
 
 #include <algorithm>
@@ -14,27 +16,17 @@
 namespace groundslam {
 
 std::vector<Match> bruteForceMatch(const cv::Mat& query, const cv::Mat& train, double ratio) {
-  // Every pair compared (hardware popcount: about 2 ns a pair); the two nearest kept for the ratio test.
+  // Every pair compared (vector popcount where the CPU has it, see NearestDescriptors.hpp); the two nearest
+  // kept for the ratio test.
   std::vector<Match> matches;
+  const std::vector<TwoNearest> nearest = twoNearest(query, train);
   for (int q = 0; q < query.rows; ++q) {
-    const std::uint8_t* descriptor = query.ptr<std::uint8_t>(q);
-    int best = -1, best_distance = 257, second_distance = 257;
-    for (int t = 0; t < train.rows; ++t) {
-      const int d = hammingDistance256(descriptor, train.ptr<std::uint8_t>(t));
-      if (d < best_distance) {
-        second_distance = best_distance;
-        best_distance = d, best = t;
-      } else if (d < second_distance) {
-        second_distance = d;
-      }
-    }
-    second_distance = std::min(second_distance, 256);  // a lone train descriptor has no close rival
+    const TwoNearest& n = nearest[static_cast<size_t>(q)];
+    const int second_distance = std::min(n.second_distance, 256);  // a lone train descriptor has no close rival
     // Lowe's ratio test (paper eq. 5) in float, as on OpenCV's DMatch distances (63 <= 0.7f * 90 holds in
     // float, not in double); best < second also rejects two equally good candidates.
-    const float f0 = static_cast<float>(best_distance), f1 = static_cast<float>(second_distance);
-    if (best >= 0 && f0 <= static_cast<float>(ratio) * f1 && f0 < f1) {
-      matches.push_back({q, best, best_distance});
-    }
+    const float f0 = static_cast<float>(n.best_distance), f1 = static_cast<float>(second_distance);
+    if (n.best >= 0 && f0 <= static_cast<float>(ratio) * f1 && f0 < f1) matches.push_back({q, n.best, n.best_distance});
   }
   return matches;
 }

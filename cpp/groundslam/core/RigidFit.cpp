@@ -5,50 +5,98 @@
 #include <memory>
 #include <random>
 
+#include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
-#include <ceres/ceres.h>
-
-#include "groundslam/core/NormalCovariance.hpp"
+#include <stdexcept>
+#include <string>
 
 namespace groundslam {
 namespace {
 
-/// Geman-McClure, rho(s) = s d^2 / (s + d^2) for s = r^2: bounded, so gross outliers have no pull.
-class GemanMcClureLoss : public ceres::LossFunction {
- public:
-  explicit GemanMcClureLoss(double scale) : d2_(scale * scale) {}
-  void Evaluate(double s, double rho[3]) const override {
-    const double denom = s + d2_;
-    rho[0] = s * d2_ / denom;
-    rho[1] = d2_ * d2_ / (denom * denom);
-    rho[2] = -2.0 * d2_ * d2_ / (denom * denom * denom);
-  }
-
- private:
-  double d2_;
-};
-
-ceres::LossFunction* makeLoss(RobustLoss loss, double scale) {
+/// rho'(s) of the robust loss at a squared residual s, where rho(s) = s near zero (Ceres's convention): the
+/// weight of a match in iteratively reweighted least squares.
+double lossWeight(RobustLoss loss, double scale, double s) {
+  const double a2 = scale * scale;
   switch (loss) {
-    case RobustLoss::huber: return new ceres::HuberLoss(scale);
-    case RobustLoss::cauchy: return new ceres::CauchyLoss(scale);
-    case RobustLoss::geman_mcclure: return new GemanMcClureLoss(scale);
+    case RobustLoss::huber: return s <= a2 ? 1.0 : scale / std::sqrt(s);  // rho = 2 a sqrt(s) - a^2 beyond a
+    case RobustLoss::cauchy: return 1.0 / (1.0 + s / a2);                  // rho = a^2 log(1 + s / a^2)
+    case RobustLoss::geman_mcclure: {                                      // rho = s a^2 / (s + a^2): bounded
+      const double d = s + a2;
+      return a2 * a2 / (d * d);
+    }
   }
   throw std::invalid_argument("odometry.loss: unknown robust loss " + std::to_string(static_cast<int>(loss)));
 }
 
-/// r = R(theta) p_source + t - p_target, the 2-D misfit of one match (paper eq. 6).
-struct PointResidual {
-  PointResidual(const Eigen::Vector2d& target, const Eigen::Vector2d& source) : target_(target), source_(source) {}
-  template <typename T>
-  bool operator()(const T* pose, T* residual) const {
-    const T c = ceres::cos(pose[2]), s = ceres::sin(pose[2]);
-    residual[0] = c * source_.x() - s * source_.y() + pose[0] - target_.x();
-    residual[1] = s * source_.x() + c * source_.y() + pose[1] - target_.y();
-    return true;
+/// The exact minimiser of sum w_i |R(theta) source_i + t - target_i|^2 (weighted 2-D Kabsch); empty when the
+/// weights vanish.
+std::optional<Pose2> weightedFit(const std::vector<Eigen::Vector2d>& target, const std::vector<Eigen::Vector2d>& source,
+                                 const std::vector<int>& subset, const std::vector<double>& weights) {
+  double total = 0.0;
+  Eigen::Vector2d mean_t = Eigen::Vector2d::Zero(), mean_s = Eigen::Vector2d::Zero();
+  for (size_t k = 0; k < subset.size(); ++k) {
+    const auto i = static_cast<size_t>(subset[k]);
+    total += weights[k];
+    mean_t += weights[k] * target[i];
+    mean_s += weights[k] * source[i];
   }
-  Eigen::Vector2d target_, source_;
-};
+  if (!(total > 0.0)) return std::nullopt;
+  mean_t /= total;
+  mean_s /= total;
+  double dot = 0.0, cross = 0.0;
+  for (size_t k = 0; k < subset.size(); ++k) {
+    const auto i = static_cast<size_t>(subset[k]);
+    const Eigen::Vector2d a = source[i] - mean_s, b = target[i] - mean_t;
+    dot += weights[k] * a.dot(b);
+    cross += weights[k] * (a.x() * b.y() - a.y() * b.x());
+  }
+  const double theta = std::atan2(cross, dot);
+  const Eigen::Vector2d t = mean_t - Eigen::Rotation2Dd(theta) * mean_s;
+  return Pose2(t.x(), t.y(), theta);
+}
+
+/// Paper eq. 6 under the robust loss, by iteratively reweighted least squares from `initial`: each step weights
+/// the matches by rho' at the current transform and solves the weighted fit exactly. Its fixed point is the
+/// stationary point a Gauss-Newton or Levenberg-Marquardt solver reaches on the robustified problem.
+/// Returns the transform and the robustified information matrix sum rho'_i J_i^T J_i (x, y, theta) there.
+std::optional<std::pair<Pose2, Eigen::Matrix3d>> robustFit(const std::vector<Eigen::Vector2d>& target,
+                                                           const std::vector<Eigen::Vector2d>& source,
+                                                           const std::vector<int>& subset, const Pose2& initial,
+                                                           const FitSettings& settings) {
+  constexpr int kMaxIterations = 100;
+  constexpr double kConvergedM = 1e-12, kConvergedRad = 1e-12;
+  Pose2 T = initial;
+  std::vector<double> weights(subset.size());
+  const auto weigh = [&](const Pose2& at) {
+    const Eigen::Matrix2d R = at.rotation();
+    const Eigen::Vector2d t = at.translation();
+    for (size_t k = 0; k < subset.size(); ++k) {
+      const auto i = static_cast<size_t>(subset[k]);
+      weights[k] = lossWeight(settings.loss, settings.loss_scale_m, (R * source[i] + t - target[i]).squaredNorm());
+    }
+  };
+  for (int iteration = 0; iteration < kMaxIterations; ++iteration) {
+    weigh(T);
+    const std::optional<Pose2> next = weightedFit(target, source, subset, weights);
+    if (!next) return std::nullopt;
+    const bool converged = (next->translation() - T.translation()).norm() < kConvergedM &&
+                           std::abs(wrapAngle(next->theta - T.theta)) < kConvergedRad;
+    T = *next;
+    if (converged) break;
+  }
+  weigh(T);
+  // r_i = R s_i + t - q_i: dr/dt = I, dr/dtheta = R' s_i.
+  Eigen::Matrix3d information = Eigen::Matrix3d::Zero();
+  const double c = std::cos(T.theta), s = std::sin(T.theta);
+  for (size_t k = 0; k < subset.size(); ++k) {
+    const Eigen::Vector2d& p = source[static_cast<size_t>(subset[k])];
+    Eigen::Matrix<double, 2, 3> J;
+    J << 1.0, 0.0, -s * p.x() - c * p.y(), 0.0, 1.0, c * p.x() - s * p.y();
+    information += weights[k] * J.transpose() * J;
+  }
+  if (!information.allFinite()) return std::nullopt;
+  return std::make_pair(T, information);
+}
 
 std::vector<int> inliersOf(const Pose2& T, const std::vector<Eigen::Vector2d>& target,
                            const std::vector<Eigen::Vector2d>& source, double threshold) {
@@ -215,29 +263,16 @@ RigidEstimate refineRigidTransform(const std::vector<Eigen::Vector2d>& target, c
     estimate.status = FitStatus::degenerate;
     return estimate;
   }
-  double pose[3] = {initial.x, initial.y, initial.theta};
-  ceres::Problem problem;
-  ceres::LossFunction* loss = makeLoss(settings.loss, settings.loss_scale_m);  // shared, owned by the problem
-  for (int i : refine_set) {
-    problem.AddResidualBlock(new ceres::AutoDiffCostFunction<PointResidual, 2, 3>(
-                                 new PointResidual(target[static_cast<size_t>(i)], source[static_cast<size_t>(i)])),
-                             loss, pose);
-  }
-  ceres::Solver::Options options;
-  options.linear_solver_type = ceres::DENSE_NORMAL_CHOLESKY;  // three parameters: the normal equations are 3x3
-  options.max_num_iterations = 25;
-  options.num_threads = 1;
-  ceres::Solver::Summary summary;
-  ceres::Solve(options, &problem, &summary);
-  const std::optional<Eigen::MatrixXd> unit_covariance =
-      summary.IsSolutionUsable() ? normalCovariance(problem, {pose}) : std::nullopt;
-  if (!unit_covariance) {
+  const auto solution = robustFit(target, source, refine_set, initial, settings);
+  const Eigen::LLT<Eigen::Matrix3d> cholesky(solution ? solution->second : Eigen::Matrix3d::Zero());
+  if (!solution || cholesky.info() != Eigen::Success) {
     estimate.status = FitStatus::solver_failed;
     return estimate;
   }
-  estimate.T_target_source = Pose2(pose[0], pose[1], pose[2]);
+  const Eigen::Matrix3d unit_covariance = cholesky.solve(Eigen::Matrix3d::Identity());
+  estimate.T_target_source = solution->first;
 
-  // Ceres assumes unit residual variance; scale by the fit's own residual variance.
+  // The information assumes unit residual variance; scale by the fit's own residual variance.
   const std::vector<int> inliers = inliersOf(estimate.T_target_source, target, source, settings.ransac_inlier_m);
   double sum_squares = 0.0;
   for (int i : inliers) {
@@ -246,7 +281,7 @@ RigidEstimate refineRigidTransform(const std::vector<Eigen::Vector2d>& target, c
   const double dof = std::max(1.0, 2.0 * static_cast<double>(inliers.size()) - 3.0);
   estimate.inliers = static_cast<int>(inliers.size());
   estimate.rms_residual_m = std::sqrt(sum_squares / static_cast<double>(std::max<size_t>(1, inliers.size())));
-  estimate.covariance = *unit_covariance * (sum_squares / dof);
+  estimate.covariance = unit_covariance * (sum_squares / dof);
   estimate.status = inliers.size() < min_inliers ? FitStatus::too_few_inliers : FitStatus::ok;
   return estimate;
 }

@@ -1,6 +1,6 @@
 #pragma once
 // Paper §III-B2: the SE(2) transform that maps one set of ground points onto its matches, under a
-// robust M-estimator (Huber, Cauchy or Geman-McClure) solved with Ceres, with its covariance.
+// robust M-estimator (Huber, Cauchy or Geman-McClure) solved by iteratively reweighted least squares, with its covariance.
 // The paper starts the solver at identity, which fails for large rotations; we start it from a
 // 2-point RANSAC estimate, so any heading works (revisits at 180 degrees included).
 
