@@ -23,9 +23,10 @@ std::optional<Slam::MountReference> Slam::farReference(const Keyframe& current, 
     if (!fit.ok()) return std::nullopt;
     MountReference reference{&candidate, {}, fit.T_target_source};
     const double inlier2 = mount_pair_radius_m_ * mount_pair_radius_m_;
+    const Eigen::Matrix2d R = fit.T_target_source.rotation();  // once, not per match
     for (const Match& m : matches) {
       const Eigen::Vector2d& q = current.features.points[static_cast<size_t>(m.query)];
-      if ((fit.T_target_source * q - candidate.features.points[static_cast<size_t>(m.train)]).squaredNorm() <= inlier2) {
+      if ((R * q + fit.T_target_source.translation() - candidate.features.points[static_cast<size_t>(m.train)]).squaredNorm() <= inlier2) {
         reference.matches.push_back(m);
       }
     }
@@ -49,9 +50,10 @@ void Slam::estimateMountOf(const Keyframe& previous, Keyframe& current, Odometry
   if (auto far = farReference(current, odometry)) references.push_back(std::move(*far));
   MountReference from_previous{&previous, {}, odometry.T_prev_curr};
   const double inlier2 = mount_pair_radius_m_ * mount_pair_radius_m_;
+  const Eigen::Matrix2d R = odometry.T_prev_curr.rotation();
   for (const Match& m : odometry.used) {
     const size_t q = static_cast<size_t>(m.query), t = static_cast<size_t>(m.train);
-    if ((odometry.T_prev_curr * current.features.points[q] - previous.features.points[t]).squaredNorm() <= inlier2) {
+    if ((R * current.features.points[q] + odometry.T_prev_curr.translation() - previous.features.points[t]).squaredNorm() <= inlier2) {
       from_previous.matches.push_back(m);
     }
   }
