@@ -24,7 +24,7 @@ TEST(PipelinedSlam, GivesSlamsResultsOneFrameLate) {
   direct.finish();
 
   Slam slam(config, vocabulary);
-  PipelinedSlam pipelined(slam, config);
+  PipelinedSlam pipelined(slam);
   std::vector<FrameResult> results;
   cv::Mat buffer;  // one buffer reused for every image, as a camera driver does
   for (int i = 0; i < simulator.frameCount(); ++i) {
@@ -63,7 +63,7 @@ TEST(PipelinedSlam, RefusesAnImageOfAnotherSize) {
   Config config;
   config.camera = cameraConfigOf(settings.camera, settings.mounting_height_m);
   Slam slam(config, nullptr);
-  PipelinedSlam pipelined(slam, config);
+  PipelinedSlam pipelined(slam);
   try {
     pipelined.push(cv::Mat(10, 20, CV_8U, cv::Scalar(0)), 0.0);
     FAIL() << "accepted a 20x10 image";

@@ -113,6 +113,10 @@ TEST(CraftedConfig, SlamRefusesAConfigurationBuiltInCodeWithTheKeyNamed) {
   config = loadConfig({dataFile("config/camera.yaml")}).config;
   config.camera.fx = std::numeric_limits<double>::infinity();
   EXPECT_NE(inputErrorOf([&] { Slam slam(config, nullptr); }).find("camera.fx: value inf is not a finite number"), std::string::npos);
+  config = loadConfig({dataFile("config/camera.yaml")}).config;
+  config.odometry.loss = static_cast<RobustLoss>(9);  // no such loss: refused, not a silent default
+  EXPECT_NE(inputErrorOf([&] { Slam slam(config, nullptr); }).find("odometry.loss: value 9 is not one of the enum's values"),
+            std::string::npos);
 }
 
 TEST(CraftedConfig, RelativeVocabularyIsFoundBesideItsConfigFile) {

@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 
+#include "groundslam/eval/LoopClosureMetrics.hpp"
 #include "groundslam/eval/TrajectoryMetrics.hpp"
 
 using namespace groundslam;
@@ -90,4 +91,28 @@ TEST(TrajectoryMetrics, PairsByTimestampAndCountsMissingFrames) {
   EXPECT_EQ(m.paired_frames, 6);
   EXPECT_DOUBLE_EQ(m.fraction_estimated, 0.6);
   EXPECT_EQ(evaluateTrajectory(truth, estimate, 1e-4).metrics.paired_frames, 0);
+}
+
+TEST(LoopClosureMetrics, NothingAcceptedIsNullNotPerfect) {
+  // Two verified candidates, both rejected; one of them was true (its footprints overlap).
+  std::vector<LoopCandidate> candidates(2);
+  candidates[0].rejected_by = LoopGate::covariance;
+  candidates[1].rejected_by = LoopGate::bow_score;
+  CandidateTruth overlapping;
+  overlapping.footprints_overlap = true;
+  const std::vector<std::optional<CandidateTruth>> truths = {overlapping, CandidateTruth{}};
+  const LoopClosureMetrics m = summariseLoopClosures(candidates, truths);
+  EXPECT_EQ(m.verified, 2);
+  EXPECT_EQ(m.accepted, 0);
+  EXPECT_TRUE(std::isnan(m.precision));
+  EXPECT_DOUBLE_EQ(m.recall, 0.0);
+  const std::string json = loopMetricsToJson(m);
+  EXPECT_NE(json.find("\"precision\": null"), std::string::npos) << json;
+  EXPECT_NE(json.find("\"recall\": 0.000000"), std::string::npos) << json;
+  EXPECT_NE(json.find("\"mean_translation_error_m\": null"), std::string::npos) << json;
+  const std::string text = loopMetricsToText(m);
+  EXPECT_NE(text.find("precision / recall  n/a / 0.000"), std::string::npos) << text;
+  EXPECT_NE(text.find("mean n/a mm, n/a deg"), std::string::npos) << text;
+  // With no true candidate either, recall has nothing to measure.
+  EXPECT_NE(loopMetricsToJson(summariseLoopClosures({}, {})).find("\"recall\": null"), std::string::npos);
 }

@@ -1,5 +1,7 @@
 #include "groundslam/eval/LoopClosureMetrics.hpp"
 
+#include "groundslam/eval/NumberText.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -66,7 +68,7 @@ std::vector<std::optional<CandidateTruth>> candidateTruths(const std::vector<Loo
 LoopClosureMetrics summariseLoopClosures(const std::vector<LoopCandidate>& candidates,
                                          const std::vector<std::optional<CandidateTruth>>& truths) {
   LoopClosureMetrics m;
-  double sum_t = 0.0, sum_r = 0.0;
+  double sum_t = 0.0, sum_r = 0.0, max_t = 0.0, max_r = 0.0;
   for (size_t i = 0; i < candidates.size(); ++i) {
     if (!truths[i]) continue;
     const CandidateTruth& truth = *truths[i];
@@ -80,39 +82,38 @@ LoopClosureMetrics summariseLoopClosures(const std::vector<LoopCandidate>& candi
     m.wrong_accepted += wrong ? 1 : 0;
     sum_t += truth.translation_error_m;
     sum_r += truth.rotation_error_deg;
-    m.max_translation_error_m = std::max(m.max_translation_error_m, truth.translation_error_m);
-    m.max_rotation_error_deg = std::max(m.max_rotation_error_deg, truth.rotation_error_deg);
+    max_t = std::max(max_t, truth.translation_error_m);
+    max_r = std::max(max_r, truth.rotation_error_deg);
   }
   if (m.accepted > 0) {
     m.precision = static_cast<double>(m.true_positives) / m.accepted;
     m.mean_translation_error_m = sum_t / m.accepted;
     m.mean_rotation_error_deg = sum_r / m.accepted;
+    m.max_translation_error_m = max_t;
+    m.max_rotation_error_deg = max_r;
   }
   if (m.true_candidates > 0) m.recall = static_cast<double>(m.true_positives) / m.true_candidates;
   return m;
 }
 
 std::string loopMetricsToJson(const LoopClosureMetrics& m) {
-  char text[1024];
-  std::snprintf(text, sizeof(text),
-                "{\n  \"verified\": %d,\n  \"accepted\": %d,\n  \"true_candidates\": %d,\n  \"true_positives\": %d,\n"
-                "  \"wrong_accepted\": %d,\n  \"precision\": %.6f,\n  \"recall\": %.6f,\n"
-                "  \"mean_translation_error_m\": %.9f,\n  \"max_translation_error_m\": %.9f,\n"
-                "  \"mean_rotation_error_deg\": %.6f,\n  \"max_rotation_error_deg\": %.6f\n}",
-                m.verified, m.accepted, m.true_candidates, m.true_positives, m.wrong_accepted, m.precision, m.recall,
-                m.mean_translation_error_m, m.max_translation_error_m, m.mean_rotation_error_deg, m.max_rotation_error_deg);
-  return text;
+  return "{\n  \"verified\": " + std::to_string(m.verified) + ",\n  \"accepted\": " + std::to_string(m.accepted) +
+         ",\n  \"true_candidates\": " + std::to_string(m.true_candidates) + ",\n  \"true_positives\": " +
+         std::to_string(m.true_positives) + ",\n  \"wrong_accepted\": " + std::to_string(m.wrong_accepted) +
+         ",\n  \"precision\": " + jsonNumber(m.precision, 6) + ",\n  \"recall\": " + jsonNumber(m.recall, 6) +
+         ",\n  \"mean_translation_error_m\": " + jsonNumber(m.mean_translation_error_m, 9) +
+         ",\n  \"max_translation_error_m\": " + jsonNumber(m.max_translation_error_m, 9) +
+         ",\n  \"mean_rotation_error_deg\": " + jsonNumber(m.mean_rotation_error_deg, 6) +
+         ",\n  \"max_rotation_error_deg\": " + jsonNumber(m.max_rotation_error_deg, 6) + "\n}";
 }
 
 std::string loopMetricsToText(const LoopClosureMetrics& m) {
-  char text[1024];
-  std::snprintf(text, sizeof(text),
-                "loop closures         %d accepted of %d verified candidates (%d wrong)\n"
-                "  precision / recall  %.3f / %.3f  (true = footprints overlap)\n"
-                "  transform error     mean %.2f mm, %.3f deg; max %.2f mm, %.3f deg\n",
-                m.accepted, m.verified, m.wrong_accepted, m.precision, m.recall, 1000.0 * m.mean_translation_error_m,
-                m.mean_rotation_error_deg, 1000.0 * m.max_translation_error_m, m.max_rotation_error_deg);
-  return text;
+  return "loop closures         " + std::to_string(m.accepted) + " accepted of " + std::to_string(m.verified) +
+         " verified candidates (" + std::to_string(m.wrong_accepted) + " wrong)\n" +
+         "  precision / recall  " + textNumber(m.precision, 3) + " / " + textNumber(m.recall, 3) +
+         "  (true = footprints overlap)\n" + "  transform error     mean " + textNumber(m.mean_translation_error_m, 2, 1000.0) +
+         " mm, " + textNumber(m.mean_rotation_error_deg, 3) + " deg; max " + textNumber(m.max_translation_error_m, 2, 1000.0) +
+         " mm, " + textNumber(m.max_rotation_error_deg, 3) + " deg\n";
 }
 
 }  // namespace groundslam

@@ -2,6 +2,7 @@
 // Loop-closure diagnostics against ground truth: is a candidate a true revisit (the two image
 // footprints overlap on the ground), and how far off is an accepted loop transform?
 
+#include <cmath>
 #include <optional>
 #include <vector>
 
@@ -38,12 +39,14 @@ struct LoopClosureMetrics {
   int true_candidates = 0;      ///< verified candidates whose footprints overlap
   int true_positives = 0;       ///< accepted and overlapping
   int wrong_accepted = 0;       ///< accepted but not overlapping, or more than 2 cm / 2 deg off
-  double precision = 1.0;       ///< true positives / accepted (1 when none accepted)
-  double recall = 0.0;          ///< true positives / true candidates
-  double mean_translation_error_m = 0.0;  ///< over accepted loop transforms
-  double max_translation_error_m = 0.0;
-  double mean_rotation_error_deg = 0.0;
-  double max_rotation_error_deg = 0.0;
+  // NaN when there is nothing to measure (null in JSON, n/a in text): precision and the errors when no
+  // candidate was accepted, recall when no candidate was true.
+  double precision = std::nan("");  ///< true positives / accepted
+  double recall = std::nan("");     ///< true positives / true candidates
+  double mean_translation_error_m = std::nan("");  ///< over accepted loop transforms
+  double max_translation_error_m = std::nan("");
+  double mean_rotation_error_deg = std::nan("");
+  double max_rotation_error_deg = std::nan("");
 };
 
 LoopClosureMetrics summariseLoopClosures(const std::vector<LoopCandidate>& candidates,

@@ -1,5 +1,7 @@
 #include "groundslam/eval/TrajectoryMetrics.hpp"
 
+#include "groundslam/eval/NumberText.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -47,19 +49,6 @@ double rms(const std::vector<double>& values) {
   double sum = 0.0;
   for (double v : values) sum += v * v;
   return std::sqrt(sum / static_cast<double>(values.size()));
-}
-
-/// A JSON number, or null when it is not finite.
-std::string jsonNumber(double value, int decimals) {
-  if (!std::isfinite(value)) return "null";
-  char text[64];
-  std::snprintf(text, sizeof(text), "%.*f", decimals, value);
-  return text;
-}
-
-/// A figure for people: "n/a" when it is not a number.
-std::string textNumber(double value, int decimals, double factor = 1.0) {
-  return std::isfinite(value) ? jsonNumber(factor * value, decimals) : "n/a";
 }
 
 }  // namespace

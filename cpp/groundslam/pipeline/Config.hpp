@@ -106,7 +106,7 @@ struct Range {
 constexpr Range kPositive{0.0, std::numeric_limits<double>::infinity(), true};
 constexpr Range kNonNegative{0.0, std::numeric_limits<double>::infinity(), false};
 
-/// Allowed values of a string field; empty: any string.
+/// Allowed values of a string field (the readers' input settings have some); empty: any string.
 using Choices = std::vector<std::string>;
 /// The constraint of an enum field: one of its values, each of which has a name in the YAML files (the names
 /// are the readers' business: io/ConfigNames.hpp).

@@ -18,8 +18,9 @@ namespace groundslam {
 
 class PipelinedSlam {
  public:
-  /// `slam` must outlive this object and was built from `config`; nothing else may call it meanwhile.
-  PipelinedSlam(Slam& slam, const Config& config);
+  /// Images are prepared with `slam`'s configuration. `slam` must outlive this object; nothing else may call it
+  /// meanwhile.
+  explicit PipelinedSlam(Slam& slam);
   /// Waits for the frame in preparation, if any (its result is dropped when finish() was not called).
   ~PipelinedSlam();
   PipelinedSlam(const PipelinedSlam&) = delete;
@@ -28,7 +29,10 @@ class PipelinedSlam {
   /// Hands over the next image (8-bit grey, the camera's size; copied, so the caller may reuse its buffer).
   /// Its preparation starts on another thread, and the previous image goes through the back end here: the
   /// result returned is the previous frame's (empty for the first image). Results come one frame late, in order,
-  /// identical to Slam::process on the same images. Throws InputError for an image of the wrong size or type.
+  /// identical to Slam::process on the same images.
+  /// Throws std::invalid_argument (nothing pushed) for an image of the wrong size or type. An exception from
+  /// the previous frame (its preparation or the back end) is thrown here after this image has been taken;
+  /// the next frame is then matched to its predecessor by the back end, as Slam::process would.
   std::optional<FrameResult> push(const cv::Mat& image, double timestamp);
   /// Processes the frame still in preparation, then optimises the whole graph (Slam::finish); returns that
   /// frame's result (empty when no image was pushed since the last finish).
@@ -36,9 +40,10 @@ class PipelinedSlam {
 
  private:
   Slam& slam_;
-  Config config_;
   FramePreparer preparer_;
   std::future<PreparedFrame> ahead_;  ///< the frame in preparation
+  /// The frame in preparation was matched to one that did not reach the back end: its matches are dropped.
+  bool ahead_unchained_ = false;
 };
 
 }  // namespace groundslam

@@ -75,6 +75,8 @@ class Slam {
   /// The loop closer's places (null when loop closure is disabled).
   const PlaceMap* places() const { return loop_closer_ ? &loop_closer_->places() : nullptr; }
 
+  /// The configuration it runs with (as validated by the constructor).
+  const Config& config() const { return config_; }
   /// The current estimate of every processed frame's pose.
   Trajectory trajectory() const;
   const PoseGraph& graph() const { return graph_; }
