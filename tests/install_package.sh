@@ -32,11 +32,12 @@ lines=$(grep -c . "$work/example.tum")
 if ! diff <(cut -d' ' -f1-4 "$work/example.tum") <(cut -d' ' -f1-4 "$work/run/trajectory.tum") > "$work/diff.txt"; then
   echo "example and groundslam run disagree:"; head "$work/diff.txt"; exit 1
 fi
-# The Python module installed with the package imports and finds the shipped data from there.
+# The Python module installed with the package imports and finds the shipped data beside itself (P/share/groundslam
+# for P/lib/python3/dist-packages), with no environment variable, though P is not the configured prefix.
 if ls "$build"/python/groundslam.*.so >/dev/null 2>&1; then
   ls "$prefix"/lib/python3/dist-packages/groundslam.*.so >/dev/null 2>&1 || { echo "the Python module was not installed"; exit 1; }
-  PYTHONPATH="$prefix/lib/python3/dist-packages" GROUNDSLAM_DATA_DIR="$prefix/share/groundslam" /usr/bin/python3 -c \
-    "import groundslam, sys; sys.exit(0 if groundslam.__version__ and groundslam.defaults_found() else 1)" \
-    || { echo "the installed Python module does not import or find its data"; exit 1; }
+  env -u GROUNDSLAM_DATA_DIR PYTHONPATH="$prefix/lib/python3/dist-packages" /usr/bin/python3 -c \
+    "import groundslam, sys; p = '$prefix/share/groundslam/'; sys.exit(0 if groundslam.__version__ and groundslam.default_vocabulary().startswith(p) and groundslam.default_config().startswith(p) else 1)" \
+    || { echo "the installed Python module does not import or find its data under $prefix/share/groundslam"; exit 1; }
 fi
 echo "installed package: example built and run, trajectory identical to groundslam run ($lines poses)"

@@ -120,6 +120,14 @@ PYBIND11_MODULE(groundslam, m) {
       .def_readwrite("cx", &CameraConfig::cx)
       .def_readwrite("cy", &CameraConfig::cy)
       .def_readwrite("distortion", &CameraConfig::distortion)
+      .def_property(
+          "distortion_model", [](const CameraConfig& c) { return nameOf(c.distortion_model); },
+          [](CameraConfig& c, const std::string& name) {
+            const auto model = valueNamed<DistortionModel>(name);
+            if (!model) throw std::invalid_argument("distortion_model: '" + name + "' is not one of: " + allowedNames<DistortionModel>());
+            c.distortion_model = *model;
+          },
+          "radtan (k1 k2 p1 p2 k3) | equidistant (fisheye: k1 k2 k3 k4 0)")
       .def_readwrite("mounting_height_m", &CameraConfig::mounting_height_m)
       .def_readwrite("T_robot_camera", &CameraConfig::T_robot_camera);
 
@@ -232,6 +240,7 @@ PYBIND11_MODULE(groundslam, m) {
       .def_property_readonly("keyframes", [](const PyMap& map) { return map.map.anchors().size(); });
 
   m.def("default_vocabulary", &defaultVocabularyPath, "The shipped vocabulary's path (see GROUNDSLAM_DATA_DIR)");
+  m.def("default_config", &defaultConfigPath, "The shipped default.yaml: every key, its default and what it does");
   m.def("defaults_found", [] { return std::filesystem::is_regular_file(defaultVocabularyPath()); },
         "True when the shipped vocabulary is found");
   m.def(

@@ -48,6 +48,15 @@ def test_config_defaults_and_yaml(sequence):
         config.validate()
     with pytest.raises(ValueError):
         groundslam.Slam(config)
+    assert config.camera.distortion_model == "radtan"
+    config.camera.distortion_model = "equidistant"
+    assert "distortion_model: equidistant" in config.to_yaml()
+    with pytest.raises(ValueError, match="radtan, equidistant"):
+        config.camera.distortion_model = "fisheye"
+    config.vocabulary = "/somewhere/floor.gslmvoc"  # an input setting, written with the rest
+    assert "vocabulary: /somewhere/floor.gslmvoc" in config.to_yaml()
+    assert groundslam.default_config().endswith("default.yaml")
+    assert groundslam.Config.from_yaml(groundslam.default_config()).camera.fx > 0
 
 
 def test_same_trajectory_as_the_program(sequence):

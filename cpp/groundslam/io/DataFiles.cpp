@@ -1,6 +1,7 @@
 #include "groundslam/io/DataFiles.hpp"
 
 #include <cstdlib>
+#include <dlfcn.h>
 #include <filesystem>
 #include <system_error>
 
@@ -14,6 +15,20 @@ std::vector<std::string> dataFileCandidates(const std::string& installed, const 
   std::error_code error;
   const fs::path executable = fs::read_symlink("/proc/self/exe", error);
   if (!error) candidates.push_back((executable.parent_path().parent_path() / "share" / "groundslam" / installed).string());
+  // The file this code was linked into, when it is not the executable: the Python module (P/lib/python3/
+  // dist-packages/groundslam*.so, run by /usr/bin/python3) or a shared library of a program that embeds us.
+  Dl_info info{};
+  if (dladdr(reinterpret_cast<void*>(&dataFileCandidates), &info) != 0 && info.dli_fname != nullptr) {
+    const fs::path module = fs::absolute(info.dli_fname, error).lexically_normal();
+    if (!error && module != executable) {
+      for (fs::path dir = module.parent_path(); dir.has_relative_path(); dir = dir.parent_path()) {
+        if (dir.filename() == "lib") {  // P/lib/...: P/share/groundslam
+          candidates.push_back((dir.parent_path() / "share" / "groundslam" / installed).string());
+          break;
+        }
+      }
+    }
+  }
   candidates.push_back((fs::path(GROUNDSLAM_INSTALL_DATA_DIR) / installed).string());
   candidates.push_back((fs::path(GROUNDSLAM_SOURCE_DIR) / in_source).string());
   return candidates;
@@ -29,5 +44,7 @@ std::string dataFilePath(const std::string& installed, const std::string& in_sou
 }
 
 std::string defaultVocabularyPath() { return dataFilePath("vocabulary/ground.gslmvoc", "config/vocabulary/ground.gslmvoc"); }
+
+std::string defaultConfigPath() { return dataFilePath("default.yaml", "config/default.yaml"); }
 
 }  // namespace groundslam

@@ -9,7 +9,8 @@
 namespace groundslam {
 
 /// Where a shipped data file is looked for, in order: $GROUNDSLAM_DATA_DIR/<installed>; <dir of the running
-/// executable>/../share/groundslam/<installed>; <install prefix>/share/groundslam/<installed>; <source
+/// executable>/../share/groundslam/<installed>; P/share/groundslam/<installed> when the code runs from a module
+/// under P/lib (the Python module, a shared library); <install prefix>/share/groundslam/<installed>; <source
 /// tree>/<in_source>.
 std::vector<std::string> dataFileCandidates(const std::string& installed, const std::string& in_source);
 
@@ -18,5 +19,9 @@ std::string dataFilePath(const std::string& installed, const std::string& in_sou
 
 /// The shipped vocabulary (`loop_closure.vocabulary` when that key is empty).
 std::string defaultVocabularyPath();
+
+/// The shipped default configuration: every key with its default value and a comment (a starting point to
+/// copy and edit).
+std::string defaultConfigPath();
 
 }  // namespace groundslam

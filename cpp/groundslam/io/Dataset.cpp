@@ -250,7 +250,8 @@ Dataset openDataset(const std::string& path) {
     dataset = openHdGroundList(p, ext == ".txt");
     assignTimestamps(dataset, p.parent_path());
   } else {
-    throw InputError(path + ": not a dataset: expected an HD Ground list (.txt, .test) or an image folder");
+    throw InputError(path + ": not a dataset: expected an HD Ground list or a list of image paths (.txt, .test), "
+                     "an image folder, or a video file (.mp4, .avi, .mkv, ...)");
   }
   return dataset;
 }
