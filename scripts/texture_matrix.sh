@@ -48,9 +48,10 @@ l = m["loop_closure"]
 wrong = c.get("silent_wrong_motions", "n/a")
 tilt = c.get("tilt_rms_error_deg")
 tilt = f"{tilt:.2f} of {c['tilt_rms_true_deg']:.2f}" if isinstance(tilt, float) and tilt == tilt else "n/a"
+ratio = lambda v: "n/a" if v is None else f"{v:.3f}"  # null: nothing accepted (precision) or nothing true (recall)
 print(f"| {kind} | {path} | {m['paired_frames']} | {o['translation_mae_cm_per_m']:.3f} | {o['rotation_mae_deg']:.3f} | "
       f"{m['translation_mae_cm_per_m']:.3f} | {m['rotation_mae_deg']:.3f} | {1000 * m['ate_rmse_m']:.2f} | "
-      f"{l['accepted']} | {l['wrong_accepted']} | {l['precision']:.3f} | {l['recall']:.3f} | {fallback} | {wrong} | {tilt} |")
+      f"{l['accepted']} | {l['wrong_accepted']} | {ratio(l['precision'])} | {ratio(l['recall'])} | {fallback} | {wrong} | {tilt} |")
 PY
   done
 done
