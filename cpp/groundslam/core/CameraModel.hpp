@@ -1,6 +1,6 @@
 #pragma once
 // A calibrated pinhole camera with OpenCV distortion, mounted on the robot at T_robot_camera.
-// Maps pixels to metric points on the ground plane z = 0 of the robot frame (conventions.md).
+// Maps pixels to metric points on the ground plane z = 0 of the robot frame (docs/conventions.md).
 
 #include <array>
 #include <optional>

@@ -329,7 +329,7 @@ RunSettings loadDatasetConfig(const std::optional<std::string>& camera_yaml, con
 
 std::string configToYaml(const RunSettings& settings, const std::vector<std::string>& only_sections) {
   YAML::Emitter out;
-  out.SetNullFormat(YAML::LowerNull);  // `null`, as conventions.md writes it
+  out.SetNullFormat(YAML::LowerNull);  // `null`, as docs/conventions.md writes it
   out << YAML::BeginMap;
   FieldWriter writer(out, only_sections);
   visitSettingsFields(settings, writer);

@@ -1,5 +1,5 @@
 #pragma once
-// Reading and writing the run configuration as YAML (conventions.md). Files are applied in layers
+// Reading and writing the run configuration as YAML (docs/conventions.md). Files are applied in layers
 // over the defaults; unknown keys and bad values are errors that name the file, line and key.
 
 #include <optional>

@@ -1,6 +1,6 @@
 #pragma once
 // Input sequences: an HD Ground list (`NAME.txt` with poses, `NAME.test` without) or a plain folder of
-// images in natural sort order. Formats are fixed by conventions.md.
+// images in natural sort order. Formats are fixed by docs/conventions.md.
 
 #include <optional>
 #include <string>
@@ -67,7 +67,7 @@ bool isVideoFile(const std::string& path);
 /// InputError when no frame is left or a value is out of range.
 void selectFrames(Dataset& dataset, long long start, long long stop, long long every);
 
-/// Robot pose from HD Ground's A (conventions.md): m = A (cx, cy, 1); x = s m_x, y = -s m_y,
+/// Robot pose from HD Ground's A (docs/conventions.md): m = A (cx, cy, 1); x = s m_x, y = -s m_y,
 /// theta = atan2(-A10, A00), with s metres per map pixel.
 Pose2 robotPoseFromMapHomography(const Eigen::Matrix3d& A, double cx, double cy, double meters_per_pixel);
 

@@ -118,7 +118,7 @@ CameraConfig cameraConfigOf(const CameraIntrinsics& intrinsics, double mounting_
 /// The intrinsics a camera section describes.
 CameraIntrinsics intrinsicsOf(const CameraConfig& camera);
 
-/// Keys that a configuration must set (conventions.md): "section.key".
+/// Keys that a configuration must set (docs/conventions.md): "section.key".
 const std::vector<std::string>& requiredConfigKeys();
 
 /// "value V out of range [min, max]" (or "is not a finite number") when `value` is not allowed by `range`.
