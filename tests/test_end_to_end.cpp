@@ -145,3 +145,64 @@ TEST(EndToEnd, VideoFileIsReadInOrderWithItsClock) {
   EXPECT_NEAR(every[1].timestamp, 1.2, 1e-6);
   EXPECT_NE(runCli("run " + (dir / "seq" / "missing.mp4").string() + " --out " + (dir / "bad").string() + " 2> /dev/null"), 0);
 }
+
+namespace {
+
+/// The program's standard output for `args`.
+std::string cliOutput(const std::string& args) {
+  std::string out;
+  FILE* pipe = popen((std::string(GROUNDSLAM_BINARY) + " " + args + " 2>&1").c_str(), "r");
+  if (!pipe) return out;
+  char buffer[4096];
+  while (const size_t n = std::fread(buffer, 1, sizeof(buffer), pipe)) out.append(buffer, n);
+  pclose(pipe);
+  return out;
+}
+
+}  // namespace
+
+TEST(EndToEnd, InputsAsAUserGivesThem) {
+  const auto dir = scratchDir();
+  const std::string seq = (dir / "seq").string();
+  // simulate names the texture it drew, and a shorter run into the same folder leaves no stale images.
+  EXPECT_NE(cliOutput("simulate " + seq + " --frames 30 --seed 4 --texture-kind carpet").find("carpet"), std::string::npos);
+  ASSERT_EQ(runCli("simulate " + seq + " --frames 24 --seed 4 --texture-kind carpet"), 0);
+  size_t images = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(dir / "seq" / "images")) images += entry.is_regular_file() ? 1u : 0u;
+  EXPECT_EQ(images, 24u);
+  EXPECT_NE(cliOutput("simulate --help").find("(0: 60% of the footprint)"), std::string::npos);  // the automatic lane spacing
+
+  // `run` on the folder simulate wrote is a run of its sequence.txt.
+  ASSERT_EQ(runCli("run " + seq + " --out " + (dir / "folder").string()), 0);
+  ASSERT_EQ(runCli("run " + seq + "/sequence.txt --out " + (dir / "list").string()), 0);
+  EXPECT_EQ(readTextFile((dir / "folder" / "trajectory.tum").string()), readTextFile((dir / "list" / "trajectory.tum").string()));
+
+  // --start / --every on images: frames 5, 8, ..., 23 with their own timestamps (simulate writes the indices).
+  ASSERT_EQ(runCli("run " + seq + " --start 5 --every 3 --out " + (dir / "every").string()), 0);
+  const auto every = readTum((dir / "every" / "trajectory.tum").string());
+  ASSERT_EQ(every.size(), 7u);
+  EXPECT_DOUBLE_EQ(every[0].timestamp, 5.0);
+  EXPECT_DOUBLE_EQ(every[6].timestamp, 23.0);
+
+  // --calibration with the simulated camera's intrinsics, as OpenCV writes them: the same trajectory.
+  const Config camera = loadConfig({seq + "/camera.yaml"}).config;
+  {
+    cv::FileStorage fs((dir / "calibration.yaml").string(), cv::FileStorage::WRITE);
+    fs << "image_width" << camera.camera.image_width << "image_height" << camera.camera.image_height;
+    fs << "camera_matrix" << cv::Mat((cv::Mat_<double>(3, 3) << camera.camera.fx, 0, camera.camera.cx, 0, camera.camera.fy, camera.camera.cy, 0, 0, 1));
+    fs << "distortion_coefficients" << cv::Mat(cv::Mat::zeros(1, 5, CV_64F));
+  }
+  ASSERT_EQ(runCli("run " + seq + " --calibration " + (dir / "calibration.yaml").string() + " --out " + (dir / "calibrated").string()), 0);
+  EXPECT_EQ(readTextFile((dir / "calibrated" / "trajectory.tum").string()), readTextFile((dir / "list" / "trajectory.tum").string()));
+  // With another focal length the scale changes: the calibration is really used.
+  {
+    cv::FileStorage fs((dir / "other.yaml").string(), cv::FileStorage::WRITE);
+    fs << "image_width" << camera.camera.image_width << "image_height" << camera.camera.image_height;
+    fs << "camera_matrix" << cv::Mat((cv::Mat_<double>(3, 3) << 2 * camera.camera.fx, 0, camera.camera.cx, 0, 2 * camera.camera.fy, camera.camera.cy, 0, 0, 1));
+    fs << "distortion_coefficients" << cv::Mat(cv::Mat::zeros(1, 5, CV_64F));
+  }
+  ASSERT_EQ(runCli("run " + seq + " --calibration " + (dir / "other.yaml").string() + " --out " + (dir / "other").string()), 0);
+  const auto half = readTum((dir / "other" / "trajectory.tum").string()), full = readTum((dir / "list" / "trajectory.tum").string());
+  const double ratio = half.back().T_world_robot.translation().norm() / full.back().T_world_robot.translation().norm();
+  EXPECT_NEAR(ratio, 0.5, 0.02);  // twice the focal length: half the metres per pixel
+}
