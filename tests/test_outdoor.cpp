@@ -99,21 +99,23 @@ TEST(MountEstimation, PairCostDerivativesMatchFiniteDifferences) {
   const MountPairCost cost(Eigen::Vector3d(0.31, -0.22, -1.0), Eigen::Vector3d(-0.18, 0.27, -1.0), Eigen::Vector2d(0.05, -0.02), 2e-4);
   double reference[3] = {0.012, -0.009, 0.251}, current[3] = {-0.007, 0.015, 0.247}, motion[3] = {0.011, -0.004, 0.35};
   double* parameters[3] = {reference, current, motion};
-  double residual[2], j0[6], j1[6], j2[6];
-  double* jacobians[3] = {j0, j1, j2};
-  ASSERT_TRUE(cost.Evaluate(parameters, residual, jacobians));
+  const auto residual = [&](Eigen::Matrix<double, 2, 3>* d_ref, Eigen::Matrix<double, 2, 3>* d_cur, Eigen::Matrix<double, 2, 3>* d_motion) {
+    return cost.evaluate(MountAngles(reference), MountAngles(current), motion, std::cos(motion[2]), std::sin(motion[2]), d_ref,
+                         d_cur, d_motion);
+  };
+  Eigen::Matrix<double, 2, 3> jacobians[3];
+  residual(&jacobians[0], &jacobians[1], &jacobians[2]);
   for (int block = 0; block < 3; ++block) {
     for (int k = 0; k < 3; ++k) {
       const double h = 1e-7, saved = parameters[block][k];
-      double plus[2], minus[2];
       parameters[block][k] = saved + h;
-      cost.Evaluate(parameters, plus, nullptr);
+      const Eigen::Vector2d plus = residual(nullptr, nullptr, nullptr);
       parameters[block][k] = saved - h;
-      cost.Evaluate(parameters, minus, nullptr);
+      const Eigen::Vector2d minus = residual(nullptr, nullptr, nullptr);
       parameters[block][k] = saved;
       for (int row = 0; row < 2; ++row) {
         const double numeric = (plus[row] - minus[row]) / (2.0 * h);
-        EXPECT_NEAR(jacobians[block][3 * row + k], numeric, 1e-5 * std::max(1.0, std::abs(numeric)))
+        EXPECT_NEAR(jacobians[block](row, k), numeric, 1e-5 * std::max(1.0, std::abs(numeric)))
             << "block " << block << " parameter " << k << " residual " << row;
       }
     }

@@ -110,6 +110,17 @@ std::vector<int> inliersOf(const Pose2& T, const std::vector<Eigen::Vector2d>& t
   return inliers;
 }
 
+/// How many matches `T` maps within `threshold` (inliersOf's size, without building the list).
+int supportOf(const Pose2& T, const std::vector<Eigen::Vector2d>& target, const std::vector<Eigen::Vector2d>& source,
+              double threshold) {
+  int support = 0;
+  const double t2 = threshold * threshold;
+  const Eigen::Matrix2d R = T.rotation();
+  const Eigen::Vector2d t = T.translation();
+  for (size_t i = 0; i < target.size(); ++i) support += (R * source[i] + t - target[i]).squaredNorm() <= t2 ? 1 : 0;
+  return support;
+}
+
 /// Closed-form least-squares rigid fit (2-D Kabsch); always a proper rotation.
 Pose2 leastSquaresFit(const std::vector<Eigen::Vector2d>& target, const std::vector<Eigen::Vector2d>& source,
                       const std::vector<int>& subset) {
@@ -174,10 +185,10 @@ RansacResult ransac(const std::vector<Eigen::Vector2d>& target, const std::vecto
     const Eigen::Vector2d t = 0.5 * (target[i] + target[j]) - Eigen::Rotation2Dd(theta) * (0.5 * (source[i] + source[j]));
     const Pose2 T(t.x(), t.y(), theta);
     if (!withinPrior(T, prior)) continue;
-    std::vector<int> inliers = inliersOf(T, target, source, thr);
-    if (settings.measure_ambiguity) tried.push_back({T, static_cast<int>(inliers.size())});
-    if (inliers.size() <= result.inliers.size()) continue;
-    result.inliers = std::move(inliers);
+    const int support = supportOf(T, target, source, thr);  // the list only for a new best
+    if (settings.measure_ambiguity) tried.push_back({T, support});
+    if (support <= static_cast<int>(result.inliers.size())) continue;
+    result.inliers = inliersOf(T, target, source, thr);
     result.best = T;
     if (settings.measure_ambiguity) continue;
     const double w = static_cast<double>(result.inliers.size()) / static_cast<double>(target.size());
