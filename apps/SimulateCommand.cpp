@@ -5,10 +5,12 @@
 #include <memory>
 #include <sstream>
 
-#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgcodecs.hpp>  // IMWRITE_* flags; files are written through the media module
 
 #include "Commands.hpp"
 #include "Progress.hpp"
+#include "groundslam/io/ImageFile.hpp"
+#include "groundslam/io/Media.hpp"
 #include "groundslam/io/ConfigYaml.hpp"
 #include "groundslam/io/Dataset.hpp"
 #include "groundslam/io/Files.hpp"
@@ -109,8 +111,7 @@ void simulate(SimulateOptions& o) {
   const sim::SimulationSettings settings = resolveSettings(o);
   cv::Mat user_texture;
   if (!o.texture_image.empty()) {
-    user_texture = cv::imread(o.texture_image, cv::IMREAD_GRAYSCALE);
-    if (user_texture.empty()) throw InputError(o.texture_image + ": texture image not found or does not decode");
+    user_texture = loadGrayImageAnySize(o.texture_image);
   }
   const sim::SequenceSimulator simulator(settings, user_texture);
   // A folder that holds something other than an earlier simulation is not overwritten.
@@ -143,7 +144,7 @@ void simulate(SimulateOptions& o) {
     char name[32];
     std::snprintf(name, sizeof(name), "images/%06d.%s", i, o.image_format.c_str());
     const std::string path = (fs::path(o.out_dir) / name).string();
-    if (!cv::imwrite(path, simulator.renderFrame(i), {cv::IMWRITE_JPEG_QUALITY, o.jpeg_quality})) {
+    if (!media().write(path, simulator.renderFrame(i), {cv::IMWRITE_JPEG_QUALITY, o.jpeg_quality})) {
       throw InputError(path + ": cannot write image");
     }
     const Pose2& pose = simulator.groundTruth()[static_cast<size_t>(i)];

@@ -5,7 +5,7 @@
 
 #include <unistd.h>
 
-#include <opencv2/imgcodecs.hpp>
+#include <opencv2/core.hpp>
 
 #include "Commands.hpp"
 #include "Progress.hpp"
@@ -69,9 +69,7 @@ void train(const TrainOptions& o) {
   Progress progress("extract", static_cast<int>(count));
   for (size_t i = 0; i < count; ++i) {
     const std::string& path = all[i * all.size() / count];
-    cv::Mat image = cv::imread(path, cv::IMREAD_GRAYSCALE | cv::IMREAD_ANYDEPTH);
-    if (image.depth() == CV_16U) image = toEightBit(image);
-    if (image.empty()) throw InputError(path + ": image not found or does not decode");
+    const cv::Mat image = loadGrayImageAnySize(path);
     descriptors.push_back(extractor.detect(image).descriptors);
     progress.update(static_cast<int>(i + 1));
   }

@@ -8,7 +8,7 @@ set -euo pipefail
 
 packages=(
   cmake make g++ pkg-config
-  libopencv-dev libceres-dev libeigen3-dev libyaml-cpp-dev libcli11-dev
+  libopencv-dev libceres-dev libeigen3-dev libyaml-cpp-dev libcli11-dev libpng-dev libjpeg-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   python3 python3-numpy python3-matplotlib python3-dev pybind11-dev python3-pytest
   chromium fonts-dejavu-core

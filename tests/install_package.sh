@@ -8,7 +8,7 @@ build=$1; source=$2; work=$3
 rm -rf "$work"; mkdir -p "$work"
 prefix=$work/prefix
 cmake --install "$build" --prefix "$prefix" > "$work/install.log"
-for f in bin/groundslam share/groundslam/vocabulary/ground.gslmvoc share/groundslam/default.yaml \
+for f in bin/groundslam lib/groundslam/groundslam_media.so share/groundslam/vocabulary/ground.gslmvoc share/groundslam/default.yaml \
          include/groundslam/groundslam.hpp lib/cmake/groundslam/groundslamConfig.cmake; do
   [ -f "$prefix/$f" ] || { echo "not installed: $f"; exit 1; }
 done

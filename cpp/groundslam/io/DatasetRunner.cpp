@@ -6,10 +6,10 @@
 #include <memory>
 
 #include <opencv2/imgproc.hpp>
-#include <opencv2/videoio.hpp>
 
 #include "groundslam/io/ImageFile.hpp"
 #include "groundslam/io/InputError.hpp"
+#include "groundslam/io/Media.hpp"
 
 namespace groundslam {
 
@@ -21,15 +21,15 @@ struct Loaded {
 };
 
 /// A video file or camera device, read in order: while the back end works on one frame, the next is read,
-/// prepared and matched to its predecessor on another thread (one at a time: VideoCapture reads in order).
+/// prepared and matched to its predecessor on another thread (one at a time: a video reads in order).
 RunnerOutput runVideo(const Dataset& dataset, const Config& config, Slam& slam, const RunnerCallbacks& callbacks) {
-  cv::VideoCapture capture;
+  std::unique_ptr<VideoStream> capture;
   if (dataset.video_file) {
-    capture.open(*dataset.video_file);
-    if (!capture.isOpened()) throw InputError(*dataset.video_file + ": cannot open the video (unsupported codec or not a video)");
+    capture = media().openVideo(*dataset.video_file);
+    if (!capture) throw InputError(*dataset.video_file + ": cannot open the video (unsupported codec or not a video)");
   } else {
-    capture.open(*dataset.camera_device);
-    if (!capture.isOpened()) throw InputError(dataset.source + ": cannot open the camera device");
+    capture = media().openCamera(*dataset.camera_device);
+    if (!capture) throw InputError(dataset.source + ": cannot open the camera device");
   }
   const FramePreparer preparer(config);
   const auto clock_start = std::chrono::steady_clock::now();
@@ -41,15 +41,15 @@ RunnerOutput runVideo(const Dataset& dataset, const Config& config, Slam& slam, 
     for (;;) {
       const auto start = std::chrono::steady_clock::now();
       if (dataset.video_stop >= 0 && read >= dataset.video_stop) return std::nullopt;
-      if (!capture.read(frame) || frame.empty()) return std::nullopt;
+      if (!capture->read(frame)) return std::nullopt;
       const auto arrived = std::chrono::steady_clock::now();  // a camera's frame: when read() returned it
       const long long index = read++;
       if (index < dataset.video_start || (index - dataset.video_start) % dataset.video_every != 0) continue;
-      double timestamp = dataset.video_file ? capture.get(cv::CAP_PROP_POS_MSEC) / 1000.0
+      double timestamp = dataset.video_file ? capture->positionMs() / 1000.0
                                             : std::chrono::duration<double>(arrived - clock_start).count();
       // A container without usable times (or going back): the frame rate's clock, else the frame index.
       if (!(timestamp > last_timestamp)) {
-        const double fps = capture.get(cv::CAP_PROP_FPS);
+        const double fps = capture->fps();
         timestamp = fps > 0.0 ? static_cast<double>(index) / fps : static_cast<double>(index);
         if (!(timestamp > last_timestamp)) timestamp = last_timestamp + 1e-3;
       }

@@ -5,9 +5,11 @@
 #include <filesystem>
 #include <fstream>
 
-#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgcodecs.hpp>  // the IMREAD_* flags only: decoding goes through GrayDecoders or the media module
 
+#include "groundslam/io/GrayDecoders.hpp"
 #include "groundslam/io/InputError.hpp"
+#include "groundslam/io/Media.hpp"
 
 namespace groundslam {
 namespace {
@@ -110,6 +112,13 @@ void checkHeaderSize(const std::string& path, int expected_width, int expected_h
   }
 }
 
+/// The image as cv::imread(path, flags) gives it: grey PNG and JPEG decoded here, anything else by OpenCV in the
+/// media module. `reduction` > 1: a JPEG reduced by that factor (flags then ask for the same).
+cv::Mat readImage(const std::string& path, int flags, int reduction) {
+  std::optional<cv::Mat> image = isJpeg(path) ? decodeGrayJpeg(path, reduction) : reduction == 1 ? decodeGrayPng(path) : std::nullopt;
+  return image ? *image : media().read(path, flags);
+}
+
 int reducedReadFlag(int factor) {
   switch (factor) {
     case 2: return cv::IMREAD_REDUCED_GRAYSCALE_2;
@@ -125,7 +134,7 @@ DecodedImage loadGrayImageForExtraction(const std::string& path, int expected_wi
   const int flag = reducedReadFlag(jpeg_reduction);
   if (flag == 0 || !isJpeg(path)) return DecodedImage{loadGrayImage(path, expected_width, expected_height), 1};
   checkHeaderSize(path, expected_width, expected_height);
-  cv::Mat image = cv::imread(path, flag);
+  cv::Mat image = readImage(path, flag, jpeg_reduction);
   if (image.empty()) throw InputError(path + ": image does not decode");
   // The scaled decoder rounds the size up: ceil(size / factor).
   const int width = (expected_width + jpeg_reduction - 1) / jpeg_reduction;
@@ -136,11 +145,21 @@ DecodedImage loadGrayImageForExtraction(const std::string& path, int expected_wi
   return DecodedImage{image, jpeg_reduction};
 }
 
+cv::Mat loadGrayImageAnySize(const std::string& path) {
+  std::error_code error;
+  if (!std::filesystem::is_regular_file(path, error)) throw InputError(path + ": image not found");
+  cv::Mat image = readImage(path, cv::IMREAD_GRAYSCALE | cv::IMREAD_ANYDEPTH, 1);
+  if (image.empty()) throw InputError(path + ": image does not decode");
+  if (image.depth() == CV_16U) image = toEightBit(image);
+  if (image.depth() != CV_8U) throw InputError(path + ": pixels are not 8- or 16-bit integers (floating-point images are not read)");
+  return image;
+}
+
 cv::Mat loadGrayImage(const std::string& path, int expected_width, int expected_height) {
   std::error_code error;
   if (!std::filesystem::is_regular_file(path, error)) throw InputError(path + ": image not found");
   checkHeaderSize(path, expected_width, expected_height);
-  cv::Mat image = cv::imread(path, cv::IMREAD_GRAYSCALE | cv::IMREAD_ANYDEPTH);
+  cv::Mat image = readImage(path, cv::IMREAD_GRAYSCALE | cv::IMREAD_ANYDEPTH, 1);
   if (image.empty()) throw InputError(path + ": image does not decode");
   if (image.depth() == CV_16U) image = toEightBit(image);
   if (image.depth() != CV_8U) throw InputError(path + ": pixels are not 8- or 16-bit integers (floating-point images are not read)");

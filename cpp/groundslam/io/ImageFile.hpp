@@ -22,6 +22,8 @@ cv::Mat toEightBit(const cv::Mat& sixteen_bit);
 /// header before a large image is decoded.
 cv::Mat loadGrayImage(const std::string& path, int expected_width, int expected_height);
 
+/// Loads an image of any size as 8-bit grey, as loadGrayImage does (a texture, vocabulary training images).
+cv::Mat loadGrayImageAnySize(const std::string& path);
 /// An image decoded for feature extraction: `reduced_by` > 1 when the decoder shrank it by that factor itself.
 struct DecodedImage {
   cv::Mat image;

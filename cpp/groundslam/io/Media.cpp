@@ -1,0 +1,88 @@
+#include "groundslam/io/Media.hpp"
+
+#include <dlfcn.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <mutex>
+#include <system_error>
+
+#include "groundslam/io/InputError.hpp"
+
+namespace fs = std::filesystem;
+
+namespace groundslam {
+namespace {
+
+constexpr const char* kModuleName = "groundslam_media.so";
+
+/// P for code running from P/bin/... or P/lib/... (the executable, or the module this code was linked into).
+std::vector<fs::path> prefixesOfRunningCode() {
+  std::vector<fs::path> prefixes;
+  std::error_code error;
+  const fs::path executable = fs::read_symlink("/proc/self/exe", error);
+  if (!error) prefixes.push_back(executable.parent_path().parent_path());
+  Dl_info info{};
+  if (dladdr(reinterpret_cast<void*>(&mediaModuleCandidates), &info) != 0 && info.dli_fname != nullptr) {
+    const fs::path module = fs::absolute(info.dli_fname, error).lexically_normal();
+    for (fs::path dir = module.parent_path(); !error && dir.has_relative_path(); dir = dir.parent_path()) {
+      if (dir.filename() == "lib") {
+        prefixes.push_back(dir.parent_path());
+        break;
+      }
+    }
+  }
+  return prefixes;
+}
+
+const Media* load() {
+  std::string tried;
+  for (const std::string& candidate : mediaModuleCandidates()) {
+    std::error_code error;
+    if (!fs::is_regular_file(candidate, error)) {
+      tried += "\n  " + candidate + " (not there)";
+      continue;
+    }
+    void* handle = dlopen(candidate.c_str(), RTLD_NOW | RTLD_LOCAL);
+    if (!handle) {
+      const char* why = dlerror();
+      tried += "\n  " + candidate + " (" + (why ? why : "cannot be loaded") + ")";
+      continue;
+    }
+    using Create = const Media* (*)();
+    const auto create = reinterpret_cast<Create>(dlsym(handle, "groundslam_media_create"));
+    if (const Media* media = create ? create() : nullptr) return media;  // kept loaded for the process's life
+    tried += "\n  " + candidate + " (no groundslam_media_create)";
+  }
+  throw InputError("the OpenCV media module (" + std::string(kModuleName) +
+                   ": image formats other than grey PNG / JPEG, video, writing images) was not found:" + tried +
+                   "\nset GROUNDSLAM_MEDIA_MODULE to its path");
+}
+
+}  // namespace
+
+std::vector<std::string> mediaModuleCandidates() {
+  std::vector<std::string> candidates;
+  if (const char* path = std::getenv("GROUNDSLAM_MEDIA_MODULE"); path && *path) candidates.emplace_back(path);
+  for (const fs::path& prefix : prefixesOfRunningCode()) candidates.push_back((prefix / "lib" / "groundslam" / kModuleName).string());
+  candidates.push_back((fs::path(GROUNDSLAM_INSTALL_LIB_DIR) / "groundslam" / kModuleName).string());
+  candidates.emplace_back(GROUNDSLAM_BUILD_MEDIA_MODULE);
+  return candidates;
+}
+
+const Media& media() {
+  static std::once_flag once;
+  static const Media* loaded = nullptr;
+  static std::string failure;
+  std::call_once(once, [] {
+    try {
+      loaded = load();
+    } catch (const InputError& e) {
+      failure = e.what();
+    }
+  });
+  if (!loaded) throw InputError(failure);
+  return *loaded;
+}
+
+}  // namespace groundslam
