@@ -58,7 +58,8 @@ struct RigidEstimate {
   double covarianceScore() const;
 };
 
-/// Fits T with target[i] ~ T * source[i] for matched pairs. Failure is a status, never an exception.
+/// Fits T with target[i] ~ T * source[i] for matched pairs. Failure is a status, never an exception (only a
+/// `settings.loss` that is none of RobustLoss's values, which validateConfig refuses, throws std::invalid_argument).
 RigidEstimate fitRigidTransform(const std::vector<Eigen::Vector2d>& target, const std::vector<Eigen::Vector2d>& source,
                                 const FitSettings& settings, const std::optional<TransformPrior>& prior = std::nullopt);
 

@@ -77,13 +77,14 @@ LoopClosureMetrics summariseLoopClosures(const std::vector<LoopCandidate>& candi
     if (!candidates[i].accepted()) continue;
     ++m.accepted;
     m.true_positives += truth.footprints_overlap ? 1 : 0;
-    const bool wrong = !truth.footprints_overlap || truth.translation_error_m > kWrongTranslationM ||
-                       truth.rotation_error_deg > kWrongRotationDeg;
+    // An error that could not be measured (NaN) is not a right one.
+    const bool wrong = !truth.footprints_overlap || !(truth.translation_error_m <= kWrongTranslationM) ||
+                       !(truth.rotation_error_deg <= kWrongRotationDeg);
     m.wrong_accepted += wrong ? 1 : 0;
     sum_t += truth.translation_error_m;
     sum_r += truth.rotation_error_deg;
-    max_t = std::max(max_t, truth.translation_error_m);
-    max_r = std::max(max_r, truth.rotation_error_deg);
+    max_t = std::isnan(truth.translation_error_m) ? truth.translation_error_m : std::max(max_t, truth.translation_error_m);
+    max_r = std::isnan(truth.rotation_error_deg) ? truth.rotation_error_deg : std::max(max_r, truth.rotation_error_deg);
   }
   if (m.accepted > 0) {
     m.precision = static_cast<double>(m.true_positives) / m.accepted;

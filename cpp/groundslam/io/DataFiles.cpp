@@ -17,10 +17,12 @@ std::vector<std::string> dataFileCandidates(const std::string& installed, const 
   if (!error) candidates.push_back((executable.parent_path().parent_path() / "share" / "groundslam" / installed).string());
   // The file this code was linked into, when it is not the executable: the Python module (P/lib/python3/
   // dist-packages/groundslam*.so, run by /usr/bin/python3) or a shared library of a program that embeds us.
+  // (For the executable itself glibc may report argv[0], possibly relative: only an absolute path of another file.)
   Dl_info info{};
-  if (dladdr(reinterpret_cast<void*>(&dataFileCandidates), &info) != 0 && info.dli_fname != nullptr) {
-    const fs::path module = fs::absolute(info.dli_fname, error).lexically_normal();
-    if (!error && module != executable) {
+  if (dladdr(reinterpret_cast<void*>(&dataFileCandidates), &info) != 0 && info.dli_fname != nullptr &&
+      fs::path(info.dli_fname).is_absolute()) {
+    const fs::path module = fs::path(info.dli_fname).lexically_normal();
+    if (!fs::equivalent(module, executable, error)) {
       for (fs::path dir = module.parent_path(); dir.has_relative_path(); dir = dir.parent_path()) {
         if (dir.filename() == "lib") {  // P/lib/...: P/share/groundslam
           candidates.push_back((dir.parent_path() / "share" / "groundslam" / installed).string());

@@ -29,10 +29,14 @@ bool hasExif(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   unsigned char head[2];
   if (!in.read(reinterpret_cast<char*>(head), 2) || head[0] != 0xFF || head[1] != 0xD8) return false;
-  unsigned char marker[4];
-  for (int segments = 0; segments < 1000 && in.read(reinterpret_cast<char*>(marker), 4); ++segments) {
-    if (marker[0] != 0xFF || marker[1] == 0xDA) return false;  // not a marker, or the start of the scan
-    const int length = (marker[2] << 8) | marker[3];
+  for (int segments = 0; segments < 1000; ++segments) {
+    int byte = in.get();
+    if (byte != 0xFF) return false;                              // not a marker
+    while (byte == 0xFF) byte = in.get();                        // fill bytes before the marker code
+    unsigned char size[2];
+    if (byte == EOF || byte == 0xDA || !in.read(reinterpret_cast<char*>(size), 2)) return false;  // the scan: no EXIF before it
+    const unsigned char marker[2] = {0xFF, static_cast<unsigned char>(byte)};
+    const int length = (size[0] << 8) | size[1];
     if (length < 2) return false;
     if (marker[1] == 0xE1 && length >= 8) {
       char id[4];
@@ -57,12 +61,15 @@ bool littleEndian() {
   return first == 1;
 }
 
+/// The most pixels OpenCV's decoders accept (CV_IO_MAX_IMAGE_PIXELS): larger files go to OpenCV, which refuses them.
+constexpr double kMaxPixels = 1 << 30;
+
 bool readPng(std::FILE* file, cv::Mat& out, std::vector<png_bytep>& rows) {
   png_structp png = png_create_read_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
   if (!png) return false;
-  png_infop info = png_create_info_struct(png);
-  if (!info) {
-    png_destroy_read_struct(&png, nullptr, nullptr);
+  png_infop info = png_create_info_struct(png), end = png_create_info_struct(png);
+  if (!info || !end) {
+    png_destroy_read_struct(&png, info ? &info : nullptr, end ? &end : nullptr);
     return false;
   }
   volatile bool ok = false;
@@ -71,19 +78,28 @@ bool readPng(std::FILE* file, cv::Mat& out, std::vector<png_bytep>& rows) {
     png_read_info(png, info);
     const png_uint_32 width = png_get_image_width(png, info), height = png_get_image_height(png, info);
     const int depth = png_get_bit_depth(png, info), colour = png_get_color_type(png, info);
+    // OpenCV turns an image by an EXIF orientation: files with EXIF are left to it.
     const bool plain_grey = colour == PNG_COLOR_TYPE_GRAY && (depth == 8 || depth == 16) &&
-                            png_get_interlace_type(png, info) == PNG_INTERLACE_NONE && !png_get_valid(png, info, PNG_INFO_tRNS);
-    if (plain_grey && width > 0 && height > 0 && width <= 1000000 && height <= 1000000) {
+                            png_get_interlace_type(png, info) == PNG_INTERLACE_NONE && !png_get_valid(png, info, PNG_INFO_tRNS) &&
+                            !png_get_valid(png, info, PNG_INFO_eXIf);
+    bool allocated = false;
+    if (plain_grey && width > 0 && height > 0 && static_cast<double>(width) * height <= kMaxPixels) {
+      try {  // a failed allocation must not leave the function past libpng's cleanup
+        out.create(static_cast<int>(height), static_cast<int>(width), depth == 16 ? CV_16U : CV_8U);
+        rows.resize(height);
+        allocated = true;
+      } catch (...) {
+      }
+    }
+    if (allocated) {
       if (depth == 16 && littleEndian()) png_set_swap(png);  // PNG stores 16-bit samples big-endian
-      out.create(static_cast<int>(height), static_cast<int>(width), depth == 16 ? CV_16U : CV_8U);
-      rows.resize(height);
       for (png_uint_32 r = 0; r < height; ++r) rows[r] = out.ptr<png_byte>(static_cast<int>(r));
       png_read_image(png, rows.data());
-      png_read_end(png, nullptr);
-      ok = true;
+      png_read_end(png, end);
+      ok = !png_get_valid(png, end, PNG_INFO_eXIf);  // EXIF after the pixels: OpenCV's turn too
     }
   }
-  png_destroy_read_struct(&png, &info, nullptr);
+  png_destroy_read_struct(&png, &info, &end);
   return ok;
 }
 
@@ -101,18 +117,27 @@ bool readJpeg(std::FILE* file, int reduction, cv::Mat& out) {
   info.err = jpeg_std_error(&error.manager);
   error.manager.error_exit = jpegFail;
   error.manager.emit_message = jpegQuiet;
-  jpeg_create_decompress(&info);
-  volatile bool ok = false;
-  if (setjmp(error.jump) == 0) {
+  volatile bool created = false, ok = false;
+  if (setjmp(error.jump) == 0) {  // before jpeg_create_decompress, which may fail too
+    jpeg_create_decompress(&info);
+    created = true;
     jpeg_stdio_src(&info, file);
     jpeg_read_header(&info, TRUE);
-    if (info.jpeg_color_space != JCS_CMYK && info.jpeg_color_space != JCS_YCCK) {
+    bool allocated = false;
+    if (info.jpeg_color_space != JCS_CMYK && info.jpeg_color_space != JCS_YCCK &&
+        static_cast<double>(info.image_width) * info.image_height <= kMaxPixels) {
       // What OpenCV's JPEG decoder asks libjpeg for when it reads grey, reduced by scale_denom.
       info.scale_num = 1;
       info.scale_denom = static_cast<unsigned>(reduction);
       info.out_color_space = JCS_GRAYSCALE;
       jpeg_start_decompress(&info);
-      out.create(static_cast<int>(info.output_height), static_cast<int>(info.output_width), CV_8U);
+      try {  // a failed allocation must not leave the function past libjpeg's cleanup
+        out.create(static_cast<int>(info.output_height), static_cast<int>(info.output_width), CV_8U);
+        allocated = true;
+      } catch (...) {
+      }
+    }
+    if (allocated) {
       while (info.output_scanline < info.output_height) {
         JSAMPROW row = out.ptr<JSAMPLE>(static_cast<int>(info.output_scanline));
         jpeg_read_scanlines(&info, &row, 1);
@@ -121,7 +146,7 @@ bool readJpeg(std::FILE* file, int reduction, cv::Mat& out) {
       ok = true;
     }
   }
-  jpeg_destroy_decompress(&info);
+  if (created) jpeg_destroy_decompress(&info);
   return ok;
 }
 

@@ -22,10 +22,13 @@ std::vector<fs::path> prefixesOfRunningCode() {
   std::error_code error;
   const fs::path executable = fs::read_symlink("/proc/self/exe", error);
   if (!error) prefixes.push_back(executable.parent_path().parent_path());
+  // The shared object this code is in, when it is one (the Python module); for the executable itself glibc
+  // may report argv[0], possibly relative, which /proc/self/exe already covers.
   Dl_info info{};
-  if (dladdr(reinterpret_cast<void*>(&mediaModuleCandidates), &info) != 0 && info.dli_fname != nullptr) {
-    const fs::path module = fs::absolute(info.dli_fname, error).lexically_normal();
-    for (fs::path dir = module.parent_path(); !error && dir.has_relative_path(); dir = dir.parent_path()) {
+  if (dladdr(reinterpret_cast<void*>(&mediaModuleCandidates), &info) != 0 && info.dli_fname != nullptr &&
+      fs::path(info.dli_fname).is_absolute() && !fs::equivalent(info.dli_fname, executable, error)) {
+    const fs::path module = fs::path(info.dli_fname).lexically_normal();
+    for (fs::path dir = module.parent_path(); dir.has_relative_path(); dir = dir.parent_path()) {
       if (dir.filename() == "lib") {
         prefixes.push_back(dir.parent_path());
         break;
@@ -50,9 +53,15 @@ const Media* load() {
       continue;
     }
     using Create = const Media* (*)();
-    const auto create = reinterpret_cast<Create>(dlsym(handle, "groundslam_media_create"));
-    if (const Media* media = create ? create() : nullptr) return media;  // kept loaded for the process's life
-    tried += "\n  " + candidate + " (no groundslam_media_create)";
+    const auto create = reinterpret_cast<Create>(dlsym(handle, GROUNDSLAM_MEDIA_ENTRY_NAME));
+    if (!create) {
+      tried += "\n  " + candidate + " (not this version of the module: no " + GROUNDSLAM_MEDIA_ENTRY_NAME + ")";
+      dlclose(handle);
+      continue;
+    }
+    if (const Media* media = create()) return media;  // kept loaded for the process's life
+    tried += "\n  " + candidate + " (the module did not start)";
+    dlclose(handle);
   }
   throw InputError("the OpenCV media module (" + std::string(kModuleName) +
                    ": image formats other than grey PNG / JPEG, video, writing images) was not found:" + tried +
@@ -65,8 +74,8 @@ std::vector<std::string> mediaModuleCandidates() {
   std::vector<std::string> candidates;
   if (const char* path = std::getenv("GROUNDSLAM_MEDIA_MODULE"); path && *path) candidates.emplace_back(path);
   for (const fs::path& prefix : prefixesOfRunningCode()) candidates.push_back((prefix / "lib" / "groundslam" / kModuleName).string());
-  candidates.push_back((fs::path(GROUNDSLAM_INSTALL_LIB_DIR) / "groundslam" / kModuleName).string());
   candidates.emplace_back(GROUNDSLAM_BUILD_MEDIA_MODULE);
+  candidates.push_back((fs::path(GROUNDSLAM_INSTALL_LIB_DIR) / "groundslam" / kModuleName).string());
   return candidates;
 }
 

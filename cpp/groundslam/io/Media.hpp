@@ -41,11 +41,14 @@ class Media {
 const Media& media();
 
 /// Where the module is looked for, in order: $GROUNDSLAM_MEDIA_MODULE (a file); P/lib/groundslam/ for code
-/// running from P/bin or from a module under P/lib (the Python module); the configured install prefix's
-/// lib/groundslam/; the build tree.
+/// running from P/bin or from a module under P/lib (the Python module); the build tree this code was built in;
+/// the configured install prefix's lib/groundslam/.
 std::vector<std::string> mediaModuleCandidates();
 
 }  // namespace groundslam
 
-/// The module's entry point (C linkage, found with dlsym).
-extern "C" const groundslam::Media* groundslam_media_create();
+/// The module's entry point (C linkage, found with dlsym). Its name carries the version of the Media interface
+/// (v1): a module built against another version of this header is not used.
+#define GROUNDSLAM_MEDIA_ENTRY groundslam_media_create_v1
+#define GROUNDSLAM_MEDIA_ENTRY_NAME "groundslam_media_create_v1"
+extern "C" const groundslam::Media* GROUNDSLAM_MEDIA_ENTRY();

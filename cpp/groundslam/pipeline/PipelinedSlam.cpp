@@ -19,6 +19,7 @@ std::optional<FrameResult> PipelinedSlam::push(const cv::Mat& image, double time
                                 (image.type() == CV_8UC1 ? "" : " (not 8-bit grey)") + ", the camera configuration says " +
                                 std::to_string(camera.image_width) + "x" + std::to_string(camera.image_height) + " 8-bit grey");
   }
+  cv::Mat own = image.clone();  // before the previous frame is taken: nothing is lost if this throws
   std::optional<PreparedFrame> previous;
   std::exception_ptr failure;
   if (ahead_.valid()) {
@@ -31,7 +32,7 @@ std::optional<FrameResult> PipelinedSlam::push(const cv::Mat& image, double time
   }
   // The new frame is matched to its predecessor on the preparing thread, as soon as it has descriptors.
   const cv::Mat previous_descriptors = previous ? previous->features.descriptors : cv::Mat();
-  ahead_ = std::async(std::launch::async, [this, own = image.clone(), timestamp, previous_descriptors] {
+  ahead_ = std::async(std::launch::async, [this, own = std::move(own), timestamp, previous_descriptors] {
     PreparedFrame frame = preparer_.prepare(own, timestamp);
     if (!previous_descriptors.empty()) preparer_.matchToPrevious(frame, previous_descriptors);
     return frame;
@@ -49,10 +50,15 @@ std::optional<FrameResult> PipelinedSlam::push(const cv::Mat& image, double time
 
 std::optional<FrameResult> PipelinedSlam::finish() {
   std::optional<FrameResult> last;
-  if (ahead_.valid()) {
-    PreparedFrame frame = ahead_.get();
-    if (ahead_unchained_) frame.matches_to_previous.reset();
-    last = slam_.process(std::move(frame));
+  try {
+    if (ahead_.valid()) {
+      PreparedFrame frame = ahead_.get();
+      if (ahead_unchained_) frame.matches_to_previous.reset();
+      last = slam_.process(std::move(frame));
+    }
+  } catch (...) {
+    slam_.finish();  // the frames before still get their final optimisation
+    throw;
   }
   slam_.finish();
   return last;

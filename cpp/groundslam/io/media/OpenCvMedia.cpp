@@ -36,7 +36,7 @@ class OpenCvMedia : public groundslam::Media {
 
 }  // namespace
 
-extern "C" const groundslam::Media* groundslam_media_create() {
+extern "C" const groundslam::Media* GROUNDSLAM_MEDIA_ENTRY() {
   static const OpenCvMedia media;
   return &media;
 }
