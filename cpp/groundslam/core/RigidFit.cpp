@@ -226,6 +226,7 @@ const char* fitStatusName(FitStatus status) {
     case FitStatus::degenerate: return "degenerate";
     case FitStatus::solver_failed: return "solver_failed";
     case FitStatus::ambiguous: return "ambiguous";
+    case FitStatus::implausible_motion: return "implausible_motion";
   }
   return "unknown";
 }

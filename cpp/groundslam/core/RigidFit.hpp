@@ -38,8 +38,9 @@ struct TransformPrior {
   double radius_rad = 0.0;  ///< largest rotation difference considered
 };
 
-/// `ambiguous`: set by callers that refuse a fit another transform explains almost as well (repetitive floors).
-enum class FitStatus { ok, too_few_matches, too_few_inliers, degenerate, solver_failed, ambiguous };
+/// `ambiguous`: set by callers that refuse a fit another transform explains almost as well (repetitive floors);
+/// `implausible_motion`: set by callers that refuse a motion far from the one the robot was making.
+enum class FitStatus { ok, too_few_matches, too_few_inliers, degenerate, solver_failed, ambiguous, implausible_motion };
 const char* fitStatusName(FitStatus status);
 
 struct RigidEstimate {

@@ -55,6 +55,11 @@ struct GraphConfig {
 /// Checks on an odometry fit beyond the fit's own success.
 struct OdometryChecks {
   double max_ambiguity = 0.5;  ///< a rival transform with this share of the fit's inliers makes the motion unknown
+  /// A motion whose translation differs from the last good one's, scaled to the time between the frames, by more
+  /// than max_velocity_change_m + max_velocity_change_fraction * that prediction is not believed (a repeated
+  /// floor matched one repetition over after a gap). Rotation is free: sharp turns are allowed.
+  double max_velocity_change_m = 0.02;
+  double max_velocity_change_fraction = 0.5;
 };
 
 /// Outdoors and on real robots: features that stay still in the image, and the camera's tilt and height per
@@ -172,6 +177,8 @@ void visitConfigFields(Config_& c, Visitor&& v) {
   v("odometry", "ransac_iterations", c.odometry.ransac_iterations, Range{1, 1000000});
   v("odometry", "seed", c.odometry.seed, kNonNegative);
   v("odometry", "max_ambiguity", c.odometry_checks.max_ambiguity, Range{0.0, 1.0});
+  v("odometry", "max_velocity_change_m", c.odometry_checks.max_velocity_change_m, kPositive);
+  v("odometry", "max_velocity_change_fraction", c.odometry_checks.max_velocity_change_fraction, kNonNegative);
   v("odometry", "fallback_sigma_m", c.fallback.sigma_m, kPositive);
   v("odometry", "fallback_sigma_rad", c.fallback.sigma_rad, kPositive);
   v("loop_closure", "enabled", c.loop_closure.enabled, Range{});

@@ -68,7 +68,12 @@ FrameResult Slam::process(PreparedFrame prepared) {
     OdometryEdge odometry = estimateOdometry(*previous_, current, prepared.matches_to_previous, result);
     if (!odometry.fallback && config_.outdoor.estimate_mount) estimateMountOf(*previous_, current, odometry, result);
     result.odometry = odometry.T_prev_curr;
-    if (!odometry.fallback) last_good_odometry_ = odometry;
+    if (!odometry.fallback) {
+      last_good_odometry_ = odometry;
+      last_good_odometry_seconds_ = current.timestamp - previous_->timestamp;
+    } else {
+      last_good_odometry_seconds_ = 0.0;  // the speed is unknown again: the next motion is not judged by it
+    }
     if (odometry.fallback && loop_closer_) {
       startSegment(odometry);  // tracking lost: the motion is unknown, global localization will find the pose
     } else {
@@ -317,10 +322,22 @@ OdometryEdge Slam::estimateOdometry(const Keyframe& previous, const Keyframe& cu
   // Not in the paper: between images that do not overlap (a gap, a carried robot), a repetitive floor still
   // matches one repetition over; such a fit has rivals nearly as good and is not a motion.
   if (fit.ok() && fit.ambiguity() > config_.odometry_checks.max_ambiguity) fit.status = FitStatus::ambiguous;
+  // Not in the paper: after a gap the true overlap can be too small to rival a repetition that matches well; a
+  // motion unlike the robot's, at its speed over the time between the frames, is not a motion either.
+  if (fit.ok() && !plausibleMotion(fit.T_target_source, previous.timestamp, current.timestamp)) fit.status = FitStatus::implausible_motion;
 
   OdometryEdge edge{fit.T_target_source, fit.covariance, result.matches, fit.inliers, fit.status, false, std::move(used),
                     fit.rms_residual_m};
   return fit.ok() ? edge : fallbackOdometry(edge);
+}
+
+bool Slam::plausibleMotion(const Pose2& T_prev_curr, double previous_time, double current_time) const {
+  if (!last_good_odometry_ || !(last_good_odometry_seconds_ > 0.0) || !(current_time > previous_time)) return true;
+  const double scale = (current_time - previous_time) / last_good_odometry_seconds_;
+  const Eigen::Vector2d predicted = scale * last_good_odometry_->T_prev_curr.translation();
+  const OdometryChecks& checks = config_.odometry_checks;
+  return (T_prev_curr.translation() - predicted).norm() <=
+         checks.max_velocity_change_m + checks.max_velocity_change_fraction * predicted.norm();
 }
 
 OdometryEdge Slam::fallbackOdometry(OdometryEdge failed) const {

@@ -110,6 +110,9 @@ class Slam {
   /// baseline of the current pose (empty when there is none or it does not match).
   std::optional<MountReference> farReference(const Keyframe& current, const OdometryEdge& odometry) const;
   OdometryEdge fallbackOdometry(OdometryEdge failed) const;
+  /// False when the motion's translation is far from the last good motion's, scaled to the time between frames
+  /// (config odometry.max_velocity_change_*).
+  bool plausibleMotion(const Pose2& T_prev_curr, double previous_time, double current_time) const;
   void addToGraph(const OdometryEdge& odometry);
   /// Tracking is lost: a new segment starts, tied to the last one by an edge with almost no information.
   void startSegment(const OdometryEdge& failed);
@@ -146,6 +149,8 @@ class Slam {
   PoseGraph graph_;
   std::optional<Keyframe> previous_;
   std::optional<OdometryEdge> last_good_odometry_;
+  /// The time between the two frames of last_good_odometry_; 0 after a failed frame (no speed to judge by).
+  double last_good_odometry_seconds_ = 0.0;
   std::vector<double> timestamps_;
   std::vector<bool> measured_;  ///< per frame: its pose came from a measurement, not a fallback
   std::vector<LoopCandidate> candidates_;
