@@ -80,6 +80,14 @@ struct PySlam {
   std::mutex lock;
 };
 
+/// PipelinedSlam over a Python Slam (kept alive by it): the next image prepared on another thread while the
+/// previous one goes through the back end.
+struct PyPipelined {
+  explicit PyPipelined(PySlam& s) : owner(s), pipelined(s.slam) {}
+  PySlam& owner;
+  PipelinedSlam pipelined;
+};
+
 /// A saved map with what localizing an image on it needs.
 struct PyMap {
   PyMap(const std::string& path, const RunSettings& s)
@@ -203,6 +211,26 @@ PYBIND11_MODULE(groundslam, m) {
           },
           py::arg("path"),
           "Before the first image: start on a map saved earlier (poses come out in its frame)");
+
+  py::class_<PyPipelined>(m, "PipelinedSlam",
+                          "A Slam fed one image at a time, the next image's features extracted on another thread while the "
+                          "previous one is processed: results come one frame late, identical to Slam.process")
+      .def(py::init<PySlam&>(), py::arg("slam"), py::keep_alive<1, 2>())
+      .def(
+          "push",
+          [](PyPipelined& p, const GrayArray& image, double timestamp) {
+            const cv::Mat view = asImage(image);
+            checkSize(image, p.owner.config);
+            py::gil_scoped_release release;
+            const std::lock_guard<std::mutex> guard(p.owner.lock);
+            return p.pipelined.push(view, timestamp);  // copies the image before returning
+          },
+          py::arg("image"), py::arg("timestamp"), "The previous image's FrameResult, or None for the first image")
+      .def("finish", [](PyPipelined& p) {
+        py::gil_scoped_release release;
+        const std::lock_guard<std::mutex> guard(p.owner.lock);
+        return p.pipelined.finish();
+      }, "The last image's FrameResult (None if none is pending); then the whole graph is optimised");
 
   py::class_<DatasetFrame>(m, "DatasetFrame", "One image of a dataset")
       .def_readonly("image_path", &DatasetFrame::image_path)

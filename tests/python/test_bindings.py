@@ -102,6 +102,22 @@ def test_simulator_and_tracking_accuracy():
     assert abs(math.remainder(estimate[-1, 3] - relative[-1, 2], 2 * math.pi)) < math.radians(0.5)
 
 
+def test_pipelined_slam_gives_the_same_results_one_frame_late(sequence):
+    seq, _ = sequence
+    config = groundslam.Config.from_yaml(str(seq / "camera.yaml"))
+    images = [groundslam.load_image(str(path), 320, 240) for path in images_of(seq)]
+    direct = groundslam.Slam(config)
+    expected = [direct.process(image, float(i)).status for i, image in enumerate(images)]
+    direct.finish()
+    slam = groundslam.Slam(config)
+    pipelined = groundslam.PipelinedSlam(slam)
+    results = [pipelined.push(image, float(i)) for i, image in enumerate(images)]
+    assert results[0] is None
+    statuses = [r.status for r in results[1:]] + [pipelined.finish().status]
+    assert statuses == expected
+    assert np.array_equal(slam.trajectory(), direct.trajectory())
+
+
 def test_bad_image_is_a_clear_error(sequence):
     seq, _ = sequence
     slam = groundslam.Slam(groundslam.Config.from_yaml(str(seq / "camera.yaml")))
