@@ -8,6 +8,10 @@
 
 namespace groundslam {
 
+/// The install prefixes P the running code may come from: the executable's (P/bin/...) and, when this code is
+/// in a shared object under P/lib (the Python module, a shared library), that P.
+std::vector<std::string> installPrefixesOfRunningCode();
+
 /// Where a shipped data file is looked for, in order: $GROUNDSLAM_DATA_DIR/<installed>; <dir of the running
 /// executable>/../share/groundslam/<installed>; P/share/groundslam/<installed> when the code runs from a module
 /// under P/lib (the Python module, a shared library); <install prefix>/share/groundslam/<installed>; <source

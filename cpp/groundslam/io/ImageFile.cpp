@@ -156,13 +156,8 @@ cv::Mat loadGrayImageAnySize(const std::string& path) {
 }
 
 cv::Mat loadGrayImage(const std::string& path, int expected_width, int expected_height) {
-  std::error_code error;
-  if (!std::filesystem::is_regular_file(path, error)) throw InputError(path + ": image not found");
-  checkHeaderSize(path, expected_width, expected_height);
-  cv::Mat image = readImage(path, cv::IMREAD_GRAYSCALE | cv::IMREAD_ANYDEPTH, 1);
-  if (image.empty()) throw InputError(path + ": image does not decode");
-  if (image.depth() == CV_16U) image = toEightBit(image);
-  if (image.depth() != CV_8U) throw InputError(path + ": pixels are not 8- or 16-bit integers (floating-point images are not read)");
+  checkHeaderSize(path, expected_width, expected_height);  // (a missing file has no header: named just below)
+  const cv::Mat image = loadGrayImageAnySize(path);
   if (image.cols != expected_width || image.rows != expected_height) throw wrongSize(path, image.cols, image.rows, expected_width, expected_height);
   return image;
 }

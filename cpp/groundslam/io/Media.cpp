@@ -7,6 +7,7 @@
 #include <mutex>
 #include <system_error>
 
+#include "groundslam/io/DataFiles.hpp"
 #include "groundslam/io/InputError.hpp"
 
 namespace fs = std::filesystem;
@@ -15,28 +16,6 @@ namespace groundslam {
 namespace {
 
 constexpr const char* kModuleName = "groundslam_media.so";
-
-/// P for code running from P/bin/... or P/lib/... (the executable, or the module this code was linked into).
-std::vector<fs::path> prefixesOfRunningCode() {
-  std::vector<fs::path> prefixes;
-  std::error_code error;
-  const fs::path executable = fs::read_symlink("/proc/self/exe", error);
-  if (!error) prefixes.push_back(executable.parent_path().parent_path());
-  // The shared object this code is in, when it is one (the Python module); for the executable itself glibc
-  // may report argv[0], possibly relative, which /proc/self/exe already covers.
-  Dl_info info{};
-  if (dladdr(reinterpret_cast<void*>(&mediaModuleCandidates), &info) != 0 && info.dli_fname != nullptr &&
-      fs::path(info.dli_fname).is_absolute() && !fs::equivalent(info.dli_fname, executable, error)) {
-    const fs::path module = fs::path(info.dli_fname).lexically_normal();
-    for (fs::path dir = module.parent_path(); dir.has_relative_path(); dir = dir.parent_path()) {
-      if (dir.filename() == "lib") {
-        prefixes.push_back(dir.parent_path());
-        break;
-      }
-    }
-  }
-  return prefixes;
-}
 
 const Media* load() {
   std::string tried;
@@ -73,7 +52,9 @@ const Media* load() {
 std::vector<std::string> mediaModuleCandidates() {
   std::vector<std::string> candidates;
   if (const char* path = std::getenv("GROUNDSLAM_MEDIA_MODULE"); path && *path) candidates.emplace_back(path);
-  for (const fs::path& prefix : prefixesOfRunningCode()) candidates.push_back((prefix / "lib" / "groundslam" / kModuleName).string());
+  for (const std::string& prefix : installPrefixesOfRunningCode()) {
+    candidates.push_back((fs::path(prefix) / "lib" / "groundslam" / kModuleName).string());
+  }
   candidates.emplace_back(GROUNDSLAM_BUILD_MEDIA_MODULE);
   candidates.push_back((fs::path(GROUNDSLAM_INSTALL_LIB_DIR) / "groundslam" / kModuleName).string());
   return candidates;
