@@ -89,7 +89,7 @@ RunnerOutput runVideo(const Dataset& dataset, const Config& config, Slam& slam, 
 
 RunnerOutput runDataset(const Dataset& dataset, const Config& config, Slam& slam, const RunnerCallbacks& callbacks) {
   if (dataset.isVideo()) return runVideo(dataset, config, slam, callbacks);
-  constexpr size_t kPrefetch = 2;  // frames in preparation, one preparer each
+  constexpr size_t kPrefetch = 3;  // frames in preparation, one preparer each (3: the cores never wait on a stage)
   std::vector<FramePreparer> preparers;  // built one by one: copies would share one OpenCV ORB object
   for (size_t j = 0; j < kPrefetch; ++j) preparers.emplace_back(config);
   // Frame i is matched to frame i-1 on its preparing thread as soon as i-1's descriptors exist (the back end
