@@ -1,5 +1,5 @@
 #pragma once
-// Runs Slam over a dataset the fast way: two frames decoded, ORB-extracted, projected and matched to their
+// Runs Slam over a dataset the fast way: three frames decoded, ORB-extracted, projected and matched to their
 // predecessor on other threads (one FramePreparer each) while Slam's back end works on the current frame.
 // What `groundslam run` does, for programs that embed groundslam.
 
