@@ -60,6 +60,10 @@ struct OdometryChecks {
   /// floor matched one repetition over after a gap). Rotation is free: sharp turns are allowed.
   double max_velocity_change_m = 0.02;
   double max_velocity_change_fraction = 0.5;
+  /// A fit that at least this share of its matches agrees with is believed whatever the robot's speed: frames
+  /// dropped without a trace in the timestamps make a true motion look too fast, and a repeated floor spreads
+  /// its matches over the repetitions, so its wrong fits never reach it. Above 1: never.
+  double decisive_inlier_share = 0.8;
 };
 
 /// Outdoors and on real robots: features that stay still in the image, and the camera's tilt and height per
@@ -179,6 +183,7 @@ void visitConfigFields(Config_& c, Visitor&& v) {
   v("odometry", "max_ambiguity", c.odometry_checks.max_ambiguity, Range{0.0, 1.0});
   v("odometry", "max_velocity_change_m", c.odometry_checks.max_velocity_change_m, kPositive);
   v("odometry", "max_velocity_change_fraction", c.odometry_checks.max_velocity_change_fraction, kNonNegative);
+  v("odometry", "decisive_inlier_share", c.odometry_checks.decisive_inlier_share, Range{0.0, 2.0});
   v("odometry", "fallback_sigma_m", c.fallback.sigma_m, kPositive);
   v("odometry", "fallback_sigma_rad", c.fallback.sigma_rad, kPositive);
   v("loop_closure", "enabled", c.loop_closure.enabled, Range{});

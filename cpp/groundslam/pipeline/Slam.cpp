@@ -324,7 +324,11 @@ OdometryEdge Slam::estimateOdometry(const Keyframe& previous, const Keyframe& cu
   if (fit.ok() && fit.ambiguity() > config_.odometry_checks.max_ambiguity) fit.status = FitStatus::ambiguous;
   // Not in the paper: after a gap the true overlap can be too small to rival a repetition that matches well; a
   // motion unlike the robot's, at its speed over the time between the frames, is not a motion either.
-  if (fit.ok() && !plausibleMotion(fit.T_target_source, previous.timestamp, current.timestamp)) fit.status = FitStatus::implausible_motion;
+  // Unless nearly every match agrees with it: then frames were dropped without a trace in the timestamps.
+  const bool decisive = !used.empty() && fit.inliers >= config_.odometry_checks.decisive_inlier_share * static_cast<double>(used.size());
+  if (fit.ok() && !decisive && !plausibleMotion(fit.T_target_source, previous.timestamp, current.timestamp)) {
+    fit.status = FitStatus::implausible_motion;
+  }
 
   OdometryEdge edge{fit.T_target_source, fit.covariance, result.matches, fit.inliers, fit.status, false, std::move(used),
                     fit.rms_residual_m};
