@@ -26,7 +26,7 @@ struct LocalizationSettings {
   int max_postings = 400;            ///< words with more map features than this are too common to vote
   int max_peaks = 4;                 ///< peaks verified, strongest first
   int min_votes = 8;                 ///< a peak with fewer votes is not verified
-  double max_rival_ratio = 0.8;      ///< inliers of the best rival pose / the winner's, at most
+  double max_rival_ratio = 0.5;      ///< inliers of the best rival pose / the winner's, at most
   double max_vote_ratio = 0.7;       ///< votes of the strongest other peak / the winner's, at most
   int min_inliers = 30;              ///< after guided re-matching
   double max_covariance_score = -4.0;  ///< log10 of the largest eigenvalue of the fit's covariance
