@@ -183,8 +183,8 @@ TEST(Extraction, ReducedImageKeypointsMapBackToFullResolutionPixels) {
 }
 
 TEST(Slam, AMotionUnlikeTheRobotsSpeedIsBelievedOnlyWhenTheImagesLeaveNoDoubt) {
-  // A straight lane at 1 cm per frame; then an image from 6 cm further on arrives one frame interval later
-  // (frames dropped without a trace in the timestamps). On asphalt nearly every match agrees with the 6 cm
+  // A straight lane at 1 cm per frame; then an image from 7 cm further on arrives one frame interval later
+  // (frames dropped without a trace in the timestamps). On asphalt nearly every match agrees with the 7 cm
   // fit: it is believed and right. Told to believe no fit against the robot's speed (decisive_inlier_share
   // above 1), the same frame falls back, and the next one is tracked again.
   sim::SimulationSettings settings;
@@ -216,4 +216,21 @@ TEST(Slam, AMotionUnlikeTheRobotsSpeedIsBelievedOnlyWhenTheImagesLeaveNoDoubt) {
   Slam timed(doubting, nullptr);
   for (int i = 0; i < 10; ++i) timed.process(simulator.renderFrame(i), i);
   EXPECT_EQ(timed.process(simulator.renderFrame(16), 16.0).statusName(), "ok");
+}
+
+TEST(Slam, OnARepeatedFloorAJumpUnlikeTheRobotsSpeedStaysRefused) {
+  // The same hidden 7 cm jump on 4 cm tiles: every tile's copy of a feature also matches, so well under 80% of
+  // the matches agree with any one fit (here about a third) and the speed check keeps the frame from passing
+  // as `ok`, right or wrong.
+  sim::SimulationSettings settings;
+  settings.texture_kind = "tiles";
+  settings.path.kind = sim::PathKind::lawnmower;
+  settings.path.frames = 30;
+  const sim::SequenceSimulator simulator(settings);
+  Slam slam(configFor(settings), nullptr);
+  for (int i = 0; i < 10; ++i) ASSERT_NE(slam.process(simulator.renderFrame(i), i).statusName(), "lost") << i;
+  const FrameResult jump = slam.process(simulator.renderFrame(16), 10.0);
+  EXPECT_EQ(jump.statusName(), "fallback_implausible_motion");
+  EXPECT_LT(jump.inliers, 0.6 * jump.matches);
+  EXPECT_GT(jump.inliers, configFor(settings).odometry.min_inliers);  // a fit was found: refused, not failed
 }
