@@ -216,6 +216,39 @@ TEST(StillFeatures, SplitsMatchesAtTheSamePlaceInTheImage) {
   EXPECT_EQ(split.moving.size(), 2u);
 }
 
+TEST(StillFeatures, FeaturesAtTheSamePlaceWithALikeDescriptorAreFoundWithoutMatching) {
+  // Train: four features. Query: one at train 0's place with its descriptor 30 bits off (still), one at train 1's
+  // place with an unrelated descriptor (ground that happens to land there), one next to train 2 but 5 px
+  // away (moved), and one identical to train 3 but also identical to a twin 0.5 px away (a bumper's bolts:
+  // no ratio-test match, still found, the closer descriptor wins).
+  const double px = 1.0 / 439.0;
+  GroundFeatures train, query;
+  train.rays = {{0.0, 0.0}, {0.1, 0.1}, {-0.1, 0.05}, {0.2, -0.1}, {0.2 + 0.5 * px, -0.1}};
+  train.points.assign(train.rays.size(), Eigen::Vector2d::Zero());
+  cv::RNG rng(3);
+  train.descriptors = cv::Mat(5, 32, CV_8U);
+  rng.fill(train.descriptors, cv::RNG::UNIFORM, 0, 256);
+  train.descriptors.row(3).copyTo(train.descriptors.row(4));
+  train.descriptors.at<std::uint8_t>(4, 0) ^= 0x0f;  // the twin: 4 bits off
+  query.rays = {{0.3 * px, -0.2 * px}, {0.1, 0.1}, {-0.1 + 5 * px, 0.05}, {0.2 + 0.4 * px, -0.1}};
+  query.points.assign(query.rays.size(), Eigen::Vector2d::Zero());
+  query.descriptors = cv::Mat(4, 32, CV_8U);
+  rng.fill(query.descriptors, cv::RNG::UNIFORM, 0, 256);
+  train.descriptors.row(0).copyTo(query.descriptors.row(0));
+  for (int byte = 0; byte < 30; ++byte) query.descriptors.at<std::uint8_t>(0, byte) ^= 0x01;  // 30 bits off
+  train.descriptors.row(2).copyTo(query.descriptors.row(2));
+  train.descriptors.row(3).copyTo(query.descriptors.row(3));
+  const std::vector<Match> still = findStillFeatures(query, train, 1.5 * px, 40);
+  ASSERT_EQ(still.size(), 2u);
+  EXPECT_EQ(still[0].query, 0);
+  EXPECT_EQ(still[0].train, 0);
+  EXPECT_EQ(still[0].distance, 30);
+  EXPECT_EQ(still[1].query, 3);
+  EXPECT_EQ(still[1].train, 3);
+  EXPECT_EQ(still[1].distance, 0);
+  EXPECT_EQ(findStillFeatures(query, train, 1.5 * px, 20).size(), 1u);  // 30 bits are too many at 20
+}
+
 TEST(StillFeatures, MaskLearnsCellsThatStayStillAndForgetsThem) {
   ArtifactMask mask(hdGroundAt320(), ArtifactMaskSettings{});
   GroundFeatures current;

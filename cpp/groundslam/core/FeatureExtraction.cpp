@@ -135,6 +135,21 @@ void reprojectToGround(GroundFeatures& features, const Eigen::Isometry3d& T_robo
   }
 }
 
+GroundFeatures selectFeatures(const GroundFeatures& features, const std::vector<bool>& keep) {
+  GroundFeatures kept;
+  for (size_t i = 0; i < features.size(); ++i) {
+    if (i < keep.size() && !keep[i]) continue;
+    kept.points.push_back(features.points[i]);
+    kept.descriptors.push_back(features.descriptors.row(static_cast<int>(i)));
+    if (features.hasOrientations()) {
+      kept.angles_rad.push_back(features.angles_rad[i]);
+      kept.octaves.push_back(features.octaves[i]);
+    }
+    if (features.hasRays()) kept.rays.push_back(features.rays[i]);
+  }
+  return kept;
+}
+
 GroundFeatures dropNearTwins(const GroundFeatures& features, int max_distance) {
   if (max_distance <= 0 || features.size() < 2) return features;
   const int n = static_cast<int>(features.size());
@@ -146,18 +161,8 @@ GroundFeatures dropNearTwins(const GroundFeatures& features, int max_distance) {
       }
     }
   }
-  GroundFeatures kept;
-  for (int i = 0; i < n; ++i) {
-    if (twin[static_cast<size_t>(i)]) continue;
-    kept.points.push_back(features.points[static_cast<size_t>(i)]);
-    kept.descriptors.push_back(features.descriptors.row(i));
-    if (features.hasOrientations()) {
-      kept.angles_rad.push_back(features.angles_rad[static_cast<size_t>(i)]);
-      kept.octaves.push_back(features.octaves[static_cast<size_t>(i)]);
-    }
-    if (features.hasRays()) kept.rays.push_back(features.rays[static_cast<size_t>(i)]);
-  }
-  return kept;
+  twin.flip();  // keep the ones without a twin
+  return selectFeatures(features, twin);
 }
 
 }  // namespace groundslam

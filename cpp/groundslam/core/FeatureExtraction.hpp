@@ -99,4 +99,7 @@ void reprojectToGround(GroundFeatures& features, const Eigen::Isometry3d& T_robo
 /// on repetitive floors such twins can only produce ambiguous matches.
 GroundFeatures dropNearTwins(const GroundFeatures& features, int max_distance);
 
+/// The features whose entry in `keep` is true, with everything the set has of them (rays, orientations).
+GroundFeatures selectFeatures(const GroundFeatures& features, const std::vector<bool>& keep);
+
 }  // namespace groundslam

@@ -1,6 +1,11 @@
 #include "groundslam/core/StillFeatures.hpp"
 
 #include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <utility>
+
+#include "groundslam/core/Hamming.hpp"
 
 namespace groundslam {
 
@@ -18,6 +23,40 @@ StillSplit splitStillMatches(const std::vector<Match>& matches, const GroundFeat
     ((a - b).squaredNorm() <= r2 ? split.still : split.moving).push_back(m);
   }
   return split;
+}
+
+std::vector<Match> findStillFeatures(const GroundFeatures& query, const GroundFeatures& train, double radius, int max_hamming) {
+  std::vector<Match> still;
+  if (!query.hasRays() || !train.hasRays() || !(radius > 0.0) || train.size() == 0) return still;
+  // Train features bucketed by image cells of the radius, sorted by cell: each query looks in its 3 x 3 cells.
+  const auto cell = [&](double v) { return static_cast<std::int64_t>(std::floor(v / radius)); };
+  const auto key = [](std::int64_t cx, std::int64_t cy) {
+    return (static_cast<std::uint64_t>(cx) << 32) ^ static_cast<std::uint32_t>(cy);
+  };
+  std::vector<std::pair<std::uint64_t, int>> buckets;
+  buckets.reserve(train.size());
+  for (size_t t = 0; t < train.size(); ++t) buckets.emplace_back(key(cell(train.rays[t].x()), cell(train.rays[t].y())), static_cast<int>(t));
+  std::sort(buckets.begin(), buckets.end());
+  const double r2 = radius * radius;
+  for (size_t q = 0; q < query.size(); ++q) {
+    const Eigen::Vector2d& a = query.rays[q];
+    const std::uint8_t* da = query.descriptors.ptr<std::uint8_t>(static_cast<int>(q));
+    int best = -1, best_distance = max_hamming + 1;
+    for (std::int64_t dx = -1; dx <= 1; ++dx) {
+      for (std::int64_t dy = -1; dy <= 1; ++dy) {
+        const std::uint64_t k = key(cell(a.x()) + dx, cell(a.y()) + dy);
+        auto it = std::lower_bound(buckets.begin(), buckets.end(), std::make_pair(k, -1));
+        for (; it != buckets.end() && it->first == k; ++it) {
+          const size_t t = static_cast<size_t>(it->second);
+          if ((train.rays[t] - a).squaredNorm() > r2) continue;
+          const int d = hammingDistance256(da, train.descriptors.ptr<std::uint8_t>(it->second));
+          if (d < best_distance) best = it->second, best_distance = d;
+        }
+      }
+    }
+    if (best >= 0) still.push_back({static_cast<int>(q), best, best_distance});
+  }
+  return still;
 }
 
 ArtifactMask::ArtifactMask(const CameraIntrinsics& intrinsics, const ArtifactMaskSettings& settings)
@@ -55,18 +94,9 @@ bool ArtifactMask::isArtifact(const Eigen::Vector2d& ray) const {
 
 GroundFeatures ArtifactMask::withoutArtifacts(const GroundFeatures& features) const {
   if (!features.hasRays() || artifactCells() == 0) return features;
-  GroundFeatures kept;
-  for (size_t i = 0; i < features.size(); ++i) {
-    if (isArtifact(features.rays[i])) continue;
-    kept.points.push_back(features.points[i]);
-    kept.descriptors.push_back(features.descriptors.row(static_cast<int>(i)));
-    kept.rays.push_back(features.rays[i]);
-    if (features.hasOrientations()) {
-      kept.angles_rad.push_back(features.angles_rad[i]);
-      kept.octaves.push_back(features.octaves[i]);
-    }
-  }
-  return kept;
+  std::vector<bool> keep(features.size());
+  for (size_t i = 0; i < features.size(); ++i) keep[i] = !isArtifact(features.rays[i]);
+  return selectFeatures(features, keep);
 }
 
 std::vector<Match> ArtifactMask::withoutArtifacts(const std::vector<Match>& matches, const GroundFeatures& query) const {

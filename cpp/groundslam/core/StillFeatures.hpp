@@ -23,6 +23,12 @@ struct StillSplit {
 StillSplit splitStillMatches(const std::vector<Match>& matches, const GroundFeatures& query, const GroundFeatures& train,
                              double radius);
 
+/// Every feature of `query` with a feature of `train` at the same place in the image (within `radius`, ray
+/// units) and a similar descriptor (at most `max_hamming` bits): for two frames between which the robot moved,
+/// the features that moved with the camera. Unlike splitStillMatches it needs no ratio-test match, so it also
+/// finds artifacts that look alike (a bumper's bolts, dirt specks). Returns (query, train) pairs.
+std::vector<Match> findStillFeatures(const GroundFeatures& query, const GroundFeatures& train, double radius, int max_hamming);
+
 struct ArtifactMaskSettings {
   int cells_x = 20;          ///< grid over the image
   int cells_y = 15;

@@ -38,6 +38,12 @@ struct LocalizationSettings {
   double max_odometry_disagreement_m = 0.01;
   double max_odometry_disagreement_rad = 0.035;
   int every_frames = 10;  ///< on a prior map, a tracked frame is localized on it this often (a loop closure)
+  /// While tracking (lost, or on a prior map), a localization this close to a map keyframe's own pose, and
+  /// within min_anchor_offset_rad of its heading, is refused: features fixed to the camera (the robot's shadow,
+  /// dirt, bumper) left in a keyframe put every later image there, while a true revisit lands exactly on a
+  /// keyframe's pose almost never.
+  double min_anchor_offset_m = 0.003;
+  double min_anchor_offset_rad = 0.0175;
 };
 
 enum class LocalizationStatus { localized, too_few_votes, ambiguous, too_few_inliers, covariance, clustered };

@@ -72,6 +72,9 @@ struct OutdoorConfig {
   bool reject_still = true;        ///< odometry ignores matches at the same place in both images while the rest say the robot moved
   double still_radius_px = 1.5;    ///< a match whose keypoints are this close in the image is still
   double moved_factor = 3.0;       ///< the robot moved when the fit moves the still matches by this many radii
+  /// Loop closure and the map get no feature that stayed within still_radius_px of a feature this similar
+  /// (bits) in the previous image while the fit moved it by moved_factor radii (the robot's own artifacts).
+  int still_max_hamming = 40;
   ArtifactMaskSettings mask;       ///< image cells where still matches keep appearing
   bool estimate_mount = true;      ///< estimate roll, pitch and height per frame and project with them
   double tilt_prior_deg = 1.0;     ///< standard deviation of the tilt around the calibrated mount
@@ -222,9 +225,12 @@ void visitConfigFields(Config_& c, Visitor&& v) {
   v("localization", "max_odometry_disagreement_m", c.localization.max_odometry_disagreement_m, kPositive);
   v("localization", "max_odometry_disagreement_rad", c.localization.max_odometry_disagreement_rad, kPositive);
   v("localization", "every_frames", c.localization.every_frames, Range{1, 1e9});
+  v("localization", "min_anchor_offset_m", c.localization.min_anchor_offset_m, kNonNegative);
+  v("localization", "min_anchor_offset_rad", c.localization.min_anchor_offset_rad, kNonNegative);
   v("outdoor", "reject_still", c.outdoor.reject_still, Range{});
   v("outdoor", "still_radius_px", c.outdoor.still_radius_px, Range{0.0, 50.0});
   v("outdoor", "moved_factor", c.outdoor.moved_factor, Range{1.0, 100.0});
+  v("outdoor", "still_max_hamming", c.outdoor.still_max_hamming, Range{0, 256});
   v("outdoor", "mask_cells_x", c.outdoor.mask.cells_x, Range{1, 1000});
   v("outdoor", "mask_cells_y", c.outdoor.mask.cells_y, Range{1, 1000});
   v("outdoor", "mask_fade", c.outdoor.mask.fade, Range{0.0, 1.0});

@@ -70,6 +70,18 @@ std::vector<LoopCandidate> LoopCloser::process(int frame, int segment, const Gro
   return candidates;
 }
 
+void LoopCloser::forgetPendingFeatures(int frame, const std::vector<Eigen::Vector2d>& points) {
+  const auto pending = std::find_if(pending_.begin(), pending_.end(), [&](const Pending& p) { return p.frame == frame; });
+  if (pending == pending_.end() || points.empty()) return;
+  GroundFeatures& features = pending->features;
+  std::vector<bool> keep(features.size(), true);
+  for (size_t i = 0; i < features.size(); ++i) {
+    keep[i] = std::none_of(points.begin(), points.end(), [&](const Eigen::Vector2d& p) { return p == features.points[i]; });
+  }
+  features = selectFeatures(features, keep);
+  pending->bow = vocabulary_->transform(features.descriptors);
+}
+
 bool LoopCloser::searchDue() const {
   // Loop closures a few millimetres apart constrain the same thing: the search rests until the robot has
   // driven loop_spacing_m since the last one, so a revisited place costs about what new ground costs.
@@ -247,7 +259,7 @@ std::optional<LoopCandidate> LoopCloser::localizeOnPriorMap(int frame, const Gro
   AnchorFilter usable(feature_map_.anchors().size());
   for (size_t a = 0; a < usable.size(); ++a) usable[a] = feature_map_.anchors()[a].frame < prior_frames;
   const Localization localization = localizeGlobally(feature_map_, features, localization_, fitting_, usable);
-  if (!localization.ok()) return std::nullopt;
+  if (!localization.ok() || onAnAnchorsPose(localization)) return std::nullopt;
   const size_t f = static_cast<size_t>(frame);
   const double d = recent_loops_.empty() ? path_length_m_[f] - path_length_m_[static_cast<size_t>(prior_frames)]
                                          : path_length_m_[f] - path_length_m_[static_cast<size_t>(recent_loops_.back().second)];
@@ -262,12 +274,17 @@ std::optional<LoopCandidate> LoopCloser::localizeOnPriorMap(int frame, const Gro
   return candidate;
 }
 
+bool LoopCloser::onAnAnchorsPose(const Localization& localization) const {
+  return localization.T_anchor_robot.translation().norm() < localization_.min_anchor_offset_m &&
+         std::abs(localization.T_anchor_robot.theta) < localization_.min_anchor_offset_rad;
+}
+
 std::vector<LoopCandidate> LoopCloser::relocalize(int frame, const GroundFeatures& features, const std::vector<Pose2>& estimates) {
   const int lost_segment = segmentOf(frame);
   AnchorFilter usable(feature_map_.anchors().size());
   for (size_t a = 0; a < usable.size(); ++a) usable[a] = feature_map_.anchors()[a].segment == kMapSegment;
   const Localization localization = localizeGlobally(feature_map_, features, localization_, fitting_, usable);
-  if (!localization.ok()) return {};
+  if (!localization.ok() || onAnAnchorsPose(localization)) return {};
   // One localization could be a lookalike; the next must agree with what odometry measured in between.
   if (!pending_localization_ || segmentOf(pending_localization_->frame) != lost_segment) {
     pending_localization_ = PendingLocalization{frame, localization};

@@ -89,6 +89,9 @@ class LoopCloser {
   /// when the next one agrees with odometry; then both are returned as loop candidates (frame_a: the map
   /// keyframe, frame_b: the lost frame) and the frame's segment joins the map segment.
   std::vector<LoopCandidate> relocalize(int frame, const GroundFeatures& features, const std::vector<Pose2>& estimates);
+  /// Removes from frame `frame`'s features, while it still waits to become a place, those at these points
+  /// (exactly: the caller's copies of the same features), e.g. ones found later to stay still in the image.
+  void forgetPendingFeatures(int frame, const std::vector<Eigen::Vector2d>& points);
   /// Takes a prior map (a map file of an earlier session): its keyframes are frames 0..K-1 of segment 0,
   /// before any frame of this session.
   void adoptPriorMap(const FeatureMap& prior);
@@ -132,6 +135,8 @@ class LoopCloser {
     Localization localization;
   };
   LoopCandidate candidateFrom(const Localization& localization, int frame) const;
+  /// A localization on a map keyframe's own pose (LocalizationSettings::min_anchor_offset_*): camera artifacts.
+  bool onAnAnchorsPose(const Localization& localization) const;
 
   LoopClosureSettings settings_;
   LocalizationSettings localization_;

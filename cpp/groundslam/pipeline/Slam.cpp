@@ -63,9 +63,11 @@ FrameResult Slam::process(PreparedFrame prepared) {
   Keyframe current{frame, prepared.timestamp, std::move(prepared.features), calibratedState(calibrated_mount_)};
   if (prepared.matches_to_previous) result.times.match_ms = prepared.match_ms;
 
+  std::vector<Match> still;  // matches of this frame to the previous one that stayed still in the image
   // §III-B: match to the previous image, fit T_prev_curr with a robust M-estimator (eqs. 5-6), add the edge.
   if (previous_) {
     OdometryEdge odometry = estimateOdometry(*previous_, current, prepared.matches_to_previous, result);
+    if (!odometry.fallback) still = stillFeatures(*previous_, current, odometry.T_prev_curr);
     if (!odometry.fallback && config_.outdoor.estimate_mount) estimateMountOf(*previous_, current, odometry, result);
     result.odometry = odometry.T_prev_curr;
     if (!odometry.fallback) {
@@ -99,8 +101,7 @@ FrameResult Slam::process(PreparedFrame prepared) {
 
   // §III-C: loop closures through the three gates become graph edges; the graph is optimised (LM). What
   // stays still in the image is not ground: the places and the map get only the features outside artifact cells.
-  Keyframe ground{current.index, current.timestamp, artifact_mask_.withoutArtifacts(current.features), current.mount};
-  ground.features.rays.clear();
+  const Keyframe ground = groundOf(current, still);
   closeLoops(ground, result);
   if (lost_) relocalize(ground, result);
   else if (prior_frames_ > 0) closeLoopsOnPriorMap(ground, result);
@@ -115,6 +116,36 @@ FrameResult Slam::process(PreparedFrame prepared) {
   previous_ = std::move(current);
   result.times.total_ms = prepared.extract_ms + prepared.project_ms + total.lap();
   return result;
+}
+
+std::vector<Match> Slam::stillFeatures(const Keyframe& previous, const Keyframe& current, const Pose2& T_prev_curr) const {
+  const OutdoorConfig& o = config_.outdoor;
+  if (o.still_max_hamming <= 0) return {};
+  const double moved_m = o.moved_factor * o.still_radius_px * ground_sample_m_;
+  std::vector<Match> still;
+  for (const Match& m : findStillFeatures(current.features, previous.features, o.still_radius_px / config_.camera.fx, o.still_max_hamming)) {
+    // Only where the motion should have moved the feature: near a turn's centre the ground itself stays put.
+    const Eigen::Vector2d& p = current.features.points[static_cast<size_t>(m.query)];
+    if ((T_prev_curr * p - p).norm() >= moved_m) still.push_back(m);
+  }
+  return still;
+}
+
+Keyframe Slam::groundOf(const Keyframe& current, const std::vector<Match>& still) {
+  std::vector<bool> keep(current.features.size(), true);
+  for (const Match& m : still) keep[static_cast<size_t>(m.query)] = false;
+  if (current.features.hasRays()) {
+    for (size_t i = 0; i < keep.size(); ++i) keep[i] = keep[i] && !artifact_mask_.isArtifact(current.features.rays[i]);
+  }
+  Keyframe ground{current.index, current.timestamp, selectFeatures(current.features, keep), current.mount};
+  ground.features.rays.clear();
+  if (loop_closer_ && previous_ && !still.empty()) {
+    // The previous frame's side of the same matches (its first frame's included, which no match had judged yet).
+    std::vector<Eigen::Vector2d> previous_still;
+    for (const Match& m : still) previous_still.push_back(previous_->features.points[static_cast<size_t>(m.train)]);
+    loop_closer_->forgetPendingFeatures(previous_->index, previous_still);
+  }
+  return ground;
 }
 
 void Slam::finish() {

@@ -114,6 +114,12 @@ class Slam {
   /// (config odometry.max_velocity_change_*).
   bool plausibleMotion(const Pose2& T_prev_curr, double previous_time, double current_time) const;
   void addToGraph(const OdometryEdge& odometry);
+  /// What of the current frame goes to loop closure and the map: its features outside artifact cells and
+  /// not among this frame's still matches. The previous frame's still features leave its pending place too.
+  Keyframe groundOf(const Keyframe& current, const std::vector<Match>& still);
+  /// Features of `current` at the place of a like feature of `previous` in the image although the motion
+  /// moved them (config outdoor.still_max_hamming): the robot's own shadow edge, dirt, bumper, glare.
+  std::vector<Match> stillFeatures(const Keyframe& previous, const Keyframe& current, const Pose2& T_prev_curr) const;
   /// Tracking is lost: a new segment starts, tied to the last one by an edge with almost no information.
   void startSegment(const OdometryEdge& failed);
   /// While lost: global localization; once it is accepted, the segment joins the map and the graph is optimised.
