@@ -234,6 +234,20 @@ void BM_StillSplit(benchmark::State& state) {
 }
 BENCHMARK(BM_StillSplit)->Unit(benchmark::kMillisecond);
 
+void BM_StillFeatures(benchmark::State& state) {
+  // Every feature of one frame looked up at its own image place in the previous frame (no matching).
+  const GroundFeatures a = groundFeatures(frames().first), b = groundFeatures(frames().second);
+  std::size_t found = 0;
+  for (auto _ : state) {
+    const auto still = findStillFeatures(b, a, 1.5 / frames().camera.intrinsics().fx, 40);
+    found = still.size();
+    benchmark::DoNotOptimize(still);
+  }
+  state.counters["features"] = static_cast<double>(b.size());
+  state.counters["still"] = static_cast<double>(found);
+}
+BENCHMARK(BM_StillFeatures)->Unit(benchmark::kMillisecond);
+
 void BM_MountEstimation(benchmark::State& state) {
   // One reference (the previous frame), the default 300 pairs; the pipeline uses up to three.
   const GroundFeatures a = groundFeatures(frames().first), b = groundFeatures(frames().second);

@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
-#include <utility>
 
 #include "groundslam/core/Hamming.hpp"
 
@@ -28,29 +27,39 @@ StillSplit splitStillMatches(const std::vector<Match>& matches, const GroundFeat
 std::vector<Match> findStillFeatures(const GroundFeatures& query, const GroundFeatures& train, double radius, int max_hamming) {
   std::vector<Match> still;
   if (!query.hasRays() || !train.hasRays() || !(radius > 0.0) || train.size() == 0) return still;
-  // Train features bucketed by image cells of the radius, sorted by cell: each query looks in its 3 x 3 cells.
-  const auto cell = [&](double v) { return static_cast<std::int64_t>(std::floor(v / radius)); };
-  const auto key = [](std::int64_t cx, std::int64_t cy) {
-    return (static_cast<std::uint64_t>(cx) << 32) ^ static_cast<std::uint32_t>(cy);
+  // Train features in a grid over their image extent (cells of a few radii, linked lists): each query looks
+  // in its 3 x 3 cells.
+  Eigen::Vector2d lo = train.rays.front(), hi = lo;
+  for (const Eigen::Vector2d& r : train.rays) lo = lo.cwiseMin(r), hi = hi.cwiseMax(r);
+  double cell = 4.0 * radius;
+  const double extent = std::max(hi.x() - lo.x(), hi.y() - lo.y());
+  if (extent / cell > 2000.0) cell = extent / 2000.0;  // a bounded grid whatever the rays
+  const int nx = static_cast<int>((hi.x() - lo.x()) / cell) + 1, ny = static_cast<int>((hi.y() - lo.y()) / cell) + 1;
+  std::vector<int> head(static_cast<size_t>(nx) * static_cast<size_t>(ny), -1), next(train.size(), -1);
+  const auto cellOf = [&](const Eigen::Vector2d& r, int& cx, int& cy) {
+    cx = static_cast<int>(std::floor((r.x() - lo.x()) / cell));
+    cy = static_cast<int>(std::floor((r.y() - lo.y()) / cell));
   };
-  std::vector<std::pair<std::uint64_t, int>> buckets;
-  buckets.reserve(train.size());
-  for (size_t t = 0; t < train.size(); ++t) buckets.emplace_back(key(cell(train.rays[t].x()), cell(train.rays[t].y())), static_cast<int>(t));
-  std::sort(buckets.begin(), buckets.end());
+  for (size_t t = 0; t < train.size(); ++t) {
+    int cx = 0, cy = 0;
+    cellOf(train.rays[t], cx, cy);
+    const size_t c = static_cast<size_t>(cy) * static_cast<size_t>(nx) + static_cast<size_t>(cx);
+    next[t] = head[c];
+    head[c] = static_cast<int>(t);
+  }
   const double r2 = radius * radius;
   for (size_t q = 0; q < query.size(); ++q) {
     const Eigen::Vector2d& a = query.rays[q];
+    int qx = 0, qy = 0;
+    cellOf(a, qx, qy);
     const std::uint8_t* da = query.descriptors.ptr<std::uint8_t>(static_cast<int>(q));
     int best = -1, best_distance = max_hamming + 1;
-    for (std::int64_t dx = -1; dx <= 1; ++dx) {
-      for (std::int64_t dy = -1; dy <= 1; ++dy) {
-        const std::uint64_t k = key(cell(a.x()) + dx, cell(a.y()) + dy);
-        auto it = std::lower_bound(buckets.begin(), buckets.end(), std::make_pair(k, -1));
-        for (; it != buckets.end() && it->first == k; ++it) {
-          const size_t t = static_cast<size_t>(it->second);
-          if ((train.rays[t] - a).squaredNorm() > r2) continue;
-          const int d = hammingDistance256(da, train.descriptors.ptr<std::uint8_t>(it->second));
-          if (d < best_distance) best = it->second, best_distance = d;
+    for (int y = std::max(0, qy - 1); y <= std::min(ny - 1, qy + 1); ++y) {
+      for (int x = std::max(0, qx - 1); x <= std::min(nx - 1, qx + 1); ++x) {
+        for (int t = head[static_cast<size_t>(y) * static_cast<size_t>(nx) + static_cast<size_t>(x)]; t >= 0; t = next[static_cast<size_t>(t)]) {
+          if ((train.rays[static_cast<size_t>(t)] - a).squaredNorm() > r2) continue;
+          const int d = hammingDistance256(da, train.descriptors.ptr<std::uint8_t>(t));
+          if (d < best_distance || (d == best_distance && t < best)) best = t, best_distance = d;  // ties: the first feature
         }
       }
     }
