@@ -67,7 +67,9 @@ FrameResult Slam::process(PreparedFrame prepared) {
   // §III-B: match to the previous image, fit T_prev_curr with a robust M-estimator (eqs. 5-6), add the edge.
   if (previous_) {
     OdometryEdge odometry = estimateOdometry(*previous_, current, prepared.matches_to_previous, result);
-    if (!odometry.fallback) still = stillFeatures(*previous_, current, odometry.T_prev_curr);
+    // Only where something already stayed still (a still match, an artifact cell): a clean floor pays nothing.
+    const bool artifacts_seen = result.still_matches > 0 || artifact_mask_.artifactCells() > 0;
+    if (!odometry.fallback && artifacts_seen) still = stillFeatures(*previous_, current, odometry.T_prev_curr);
     if (!odometry.fallback && config_.outdoor.estimate_mount) estimateMountOf(*previous_, current, odometry, result);
     result.odometry = odometry.T_prev_curr;
     if (!odometry.fallback) {
