@@ -102,7 +102,7 @@ FrameResult Slam::process(PreparedFrame prepared) {
   result.artifact_cells = artifact_mask_.artifactCells();
 
   // §III-C: loop closures through the three gates become graph edges; the graph is optimised (LM). What
-  // stays still in the image is not ground: the places and the map get only the features outside artifact cells.
+  // stays still in the image is not ground: the places and the map get neither artifact cells nor still features.
   const Keyframe ground = groundOf(current, still);
   closeLoops(ground, result);
   if (lost_) relocalize(ground, result);
