@@ -299,17 +299,3 @@ TEST(Relocalization, TheRobotsOwnArtifactsStayOutOfTheMap) {
   }
   EXPECT_EQ(localized, 0);
 }
-
-TEST(FeatureMap, TheRunsLastFramesJoinTheMapWhenItEnds) {
-  // Frame n-k enters the database when frame n arrives; at the end of the run the last k frames enter too, so
-  // a map saved for another session covers the whole path (a straight lane: every frame on new ground).
-  sim::SimulationSettings s = session("asphalt", sim::PathKind::lawnmower, 40, 5);
-  const sim::SequenceSimulator simulator(s);
-  Slam slam(configFor(s), shippedVocabulary());
-  for (int i = 0; i < 40; ++i) slam.process(simulator.renderFrame(i), i);
-  ASSERT_LE(slam.featureMap()->anchors().back().frame, 40 - slam.config().loop_closure.database_delay_frames);
-  slam.finish();
-  EXPECT_GE(slam.featureMap()->anchors().back().frame, 36);  // places 3 cm apart at 1 cm per frame
-  const Pose2 last = slam.featureMap()->anchors().back().T_map_anchor;
-  EXPECT_LT((last.translation() - slam.trajectory().back().T_world_robot.translation()).norm(), 0.035);
-}

@@ -112,10 +112,6 @@ std::vector<LoopCandidate> LoopCloser::verifyCandidates(int frame, const GroundF
   return candidates;
 }
 
-void LoopCloser::admitPending(const std::vector<Pose2>& estimates) {
-  if (!pending_.empty()) admitPlaces(pending_.back().frame + settings_.database_delay_frames, estimates);
-}
-
 void LoopCloser::admitPlaces(int frame, const std::vector<Pose2>& estimates) {
   // The paper's delay: frame n-k may be found only from frame n on, so neighbours never close loops. It
   // becomes a place unless the map already covers its footprint; then only its pose is kept.

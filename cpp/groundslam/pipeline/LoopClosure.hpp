@@ -89,9 +89,6 @@ class LoopCloser {
   /// when the next one agrees with odometry; then both are returned as loop candidates (frame_a: the map
   /// keyframe, frame_b: the lost frame) and the frame's segment joins the map segment.
   std::vector<LoopCandidate> relocalize(int frame, const GroundFeatures& features, const std::vector<Pose2>& estimates);
-  /// At the end of a run: the frames still waiting their k frames become places too (the map covers the
-  /// whole path), at their final estimates.
-  void admitPending(const std::vector<Pose2>& estimates);
   /// Removes from frame `frame`'s features, while it still waits to become a place, those at these points
   /// (exactly: the caller's copies of the same features), e.g. ones found later to stay still in the image.
   void forgetPendingFeatures(int frame, const std::vector<Eigen::Vector2d>& points);

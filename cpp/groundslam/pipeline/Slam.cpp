@@ -153,7 +153,6 @@ Keyframe Slam::groundOf(const Keyframe& current, const std::vector<Match>& still
 void Slam::finish() {
   FrameResult ignored;
   optimiseIfDue(ignored, true);
-  if (loop_closer_) loop_closer_->admitPending(graph_.poses());
 }
 
 void Slam::addToGraph(const OdometryEdge& odometry) {
