@@ -134,12 +134,11 @@ std::vector<Match> Slam::stillFeatures(const Keyframe& previous, const Keyframe&
 }
 
 Keyframe Slam::groundOf(const Keyframe& current, const std::vector<Match>& still) {
-  std::vector<bool> keep(current.features.size(), true);
-  for (const Match& m : still) keep[static_cast<size_t>(m.query)] = false;
-  if (current.features.hasRays()) {
-    for (size_t i = 0; i < keep.size(); ++i) keep[i] = keep[i] && !artifact_mask_.isArtifact(current.features.rays[i]);
-  }
-  Keyframe ground{current.index, current.timestamp, selectFeatures(current.features, keep), current.mount};
+  std::vector<bool> moving(current.features.size(), true);
+  for (const Match& m : still) moving[static_cast<size_t>(m.query)] = false;
+  Keyframe ground{current.index, current.timestamp,
+                  artifact_mask_.withoutArtifacts(still.empty() ? current.features : selectFeatures(current.features, moving)),
+                  current.mount};
   ground.features.rays.clear();
   if (loop_closer_ && previous_ && !still.empty()) {
     // The previous frame's side of the same matches (its first frame's included, which no match had judged yet).
