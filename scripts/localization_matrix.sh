@@ -31,7 +31,7 @@ import csv, json, math, sys
 run, kind, path, gap_start = sys.argv[1], sys.argv[2], sys.argv[3], int(sys.argv[4])
 rows = list(csv.DictReader(open(run + "/frames.csv")))
 reloc = [int(r["index"]) for r in rows if r["status"] == "relocalized" and int(r["index"]) >= gap_start]
-lost = sum(1 for r in rows if r["status"] == "lost")
+lost = sum(1 for r in rows if r["status"].startswith("lost"))  # lost_<reason>: the frame that lost tracking
 m = json.load(open(run + "/metrics.json")); l = m["loop_closure"]
 truth = {}
 for line in open(run + "/groundtruth.tum"):

@@ -174,15 +174,19 @@ TEST(Relocalization, AKidnappedRobotRelocalizesAndTheGapSnapsIntoPlace) {
   Slam slam(config, shippedVocabulary());
   Trajectory truth;
   int relocalized_at = -1, lost = 0;
+  std::string landing_status;  // frame 330's, the first after the gap
   for (int i = 0; i < simulator.frameCount(); ++i) {
     if (i >= 250 && i < 330) continue;
     const FrameResult r = slam.process(simulator.renderFrame(i), static_cast<double>(i));
     truth.push_back({static_cast<double>(i), simulator.groundTruth()[static_cast<size_t>(i)]});
+    if (i == 330) landing_status = r.statusName();
     lost += r.status == FrameStatus::lost ? 1 : 0;
     if (r.status == FrameStatus::relocalized && relocalized_at < 0) relocalized_at = i;
   }
   slam.finish();
   EXPECT_GE(lost, 1);
+  // The frame that lost tracking says why (its images do not overlap: no matches survive the ratio test).
+  EXPECT_EQ(landing_status.rfind("lost_too_few_", 0), 0u) << landing_status;
   ASSERT_GE(relocalized_at, 330);
   EXPECT_LE(relocalized_at, 335);  // within 5 frames of landing on mapped ground
   const TrajectoryMetrics m = evaluateTrajectory(truth, slam.trajectory()).metrics;

@@ -36,7 +36,7 @@ struct FrameResult {
   int matches = 0;            ///< ratio-test matches to the previous frame
   int inliers = 0;            ///< matches consistent with the fitted motion
   FrameStatus status = FrameStatus::first;
-  FitStatus fallback_reason = FitStatus::ok;  ///< why odometry failed, when status is fallback
+  FitStatus fallback_reason = FitStatus::ok;  ///< why odometry failed (status fallback, or lost on the frame whose odometry failed)
   Pose2 T_world_robot;        ///< the estimate when the frame was processed
   int loop_closures = 0;      ///< accepted loop closures of this frame
   Pose2 odometry;             ///< the odometry edge's motion from the previous frame (meaningful when status is ok)
@@ -45,13 +45,14 @@ struct FrameResult {
   MountState mount;           ///< the camera's roll, pitch and height used for this frame's ground points
   bool mount_estimated = false;  ///< mount was estimated from the images (else the calibrated mount)
   StageTimes times;
-  /// frames.csv's `status`: first | ok | fallback_<reason> (e.g. fallback_too_few_matches) | lost | relocalized.
+  /// frames.csv's `status`: first | ok | fallback_<reason> (e.g. fallback_too_few_matches) | lost_<reason> (the
+  /// frame whose failed odometry lost tracking, e.g. lost_degenerate) | lost (a later frame of a lost segment) | relocalized.
   std::string statusName() const {
     switch (status) {
       case FrameStatus::first: return "first";
       case FrameStatus::ok: return "ok";
       case FrameStatus::fallback: return std::string("fallback_") + fitStatusName(fallback_reason);
-      case FrameStatus::lost: return "lost";
+      case FrameStatus::lost: return fallback_reason == FitStatus::ok ? "lost" : std::string("lost_") + fitStatusName(fallback_reason);
       case FrameStatus::relocalized: return "relocalized";
     }
     return "unknown";
