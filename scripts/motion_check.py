@@ -3,7 +3,7 @@
 
 Usage: scripts/motion_check.py RUN_DIR SEQUENCE_DIR [--json]
 Prints: frames whose status is ok but whose odometry motion is off by more than 5 mm or 0.5 degrees
-(silent wrong motions), and the RMS error of the estimated roll, pitch and height (mount.csv).
+(silent wrong motions), the same count among low_overlap frames (flagged as less certain), and the RMS error of the estimated roll, pitch and height (mount.csv).
 """
 import csv
 import json
@@ -28,6 +28,13 @@ def between(a, b):
     return (c * dx + s * dy, -s * dx + c * dy, math.atan2(math.sin(b[2] - a[2]), math.cos(b[2] - a[2])))
 
 
+def motion_error(row, gt):
+    """A frames.csv row's odometry motion against the true one: metres, degrees."""
+    theta = math.radians(float(row['odometry_theta_deg']))
+    dm = math.hypot(float(row['odometry_x_m']) - gt[0], float(row['odometry_y_m']) - gt[1])
+    return dm, abs(math.degrees(math.atan2(math.sin(theta - gt[2]), math.cos(theta - gt[2]))))
+
+
 def main():
     run, seq = sys.argv[1], sys.argv[2]
     truth = read_tum(seq + '/groundtruth.tum')
@@ -35,15 +42,17 @@ def main():
     mounts = {int(r['index']): r for r in csv.DictReader(open(seq + '/mount.csv'))} if os.path.exists(seq + '/mount.csv') else {}
     frames = list(csv.DictReader(open(run + '/frames.csv')))
     wrong, ok, worst_m, worst_deg = 0, 0, 0.0, 0.0
+    low, low_wrong = 0, 0
     tilt_err, height_err, tilt_level = [], [], []
     for prev, row in zip(frames, frames[1:]):
         i, j = int(prev['index']), int(row['index'])
+        if row['status'] == 'low_overlap' and i in truth and j in truth:
+            low += 1
+            dm, dd = motion_error(row, between(truth[i], truth[j]))
+            low_wrong += 1 if dm > 0.005 or dd > 0.5 else 0
         if row['status'] == 'ok' and i in truth and j in truth:
             ok += 1
-            gt = between(truth[i], truth[j])
-            dm = math.hypot(float(row['odometry_x_m']) - gt[0], float(row['odometry_y_m']) - gt[1])
-            dd = abs(math.degrees(math.atan2(math.sin(math.radians(float(row['odometry_theta_deg'])) - gt[2]),
-                                             math.cos(math.radians(float(row['odometry_theta_deg'])) - gt[2]))))
+            dm, dd = motion_error(row, between(truth[i], truth[j]))
             worst_m, worst_deg = max(worst_m, dm), max(worst_deg, dd)
             if dm > 0.005 or dd > 0.5:
                 wrong += 1
@@ -54,7 +63,7 @@ def main():
             height_err.append(float(row['height_m']) - float(m['height_m']))
     rms = lambda v: math.sqrt(sum(x * x for x in v) / len(v)) if v else float('nan')
     result = {'ok_frames': ok, 'silent_wrong_motions': wrong, 'worst_ok_error_mm': 1000 * worst_m,
-              'worst_ok_error_deg': worst_deg, 'mount_estimated_frames': len(height_err),
+              'worst_ok_error_deg': worst_deg, 'low_overlap_frames': low, 'low_overlap_off': low_wrong, 'mount_estimated_frames': len(height_err),
               'tilt_rms_error_deg': rms(tilt_err), 'tilt_rms_true_deg': rms(tilt_level),
               'height_rms_error_mm': 1000 * rms(height_err)}
     if '--json' in sys.argv:

@@ -64,6 +64,19 @@ struct OdometryChecks {
   /// dropped without a trace in the timestamps make a true motion look too fast, and a repeated floor spreads
   /// its matches over the repetitions, so its wrong fits never reach it. Above 1: never.
   double decisive_inlier_share = 0.8;
+  /// When the fit has too little evidence (e.g. dropped frames leave 40% overlap: too few matches survive the
+  /// ratio test, or those that do crowd into a corner), the pair is matched again with this looser ratio test and the fit is
+  /// kept if no rival transform has more than low_overlap_max_ambiguity of its inliers; the frame says
+  /// `low_overlap`. Its speed is not judged (the gap's length is unknown). At or below matching.ratio: off.
+  double low_overlap_ratio = 0.8;
+  double low_overlap_max_ambiguity = 0.1;
+  /// Only where the overlap fell: the ratio test kept at most this share of the matches of the last good motion
+  /// (on a floor that gives few matches everywhere, a looser test only adds look-alikes).
+  double low_overlap_max_match_share = 0.5;
+  /// Standard deviations added to a low-overlap motion's covariance: its matches crowd into the small shared
+  /// area, and over a gap a rocking mount's tilt differs between the frames (1 degree at 25 cm: 4 mm).
+  double low_overlap_sigma_m = 0.005;
+  double low_overlap_sigma_rad = 0.005;
 };
 
 /// Outdoors and on real robots: features that stay still in the image, and the camera's tilt and height per
@@ -187,6 +200,11 @@ void visitConfigFields(Config_& c, Visitor&& v) {
   v("odometry", "max_velocity_change_m", c.odometry_checks.max_velocity_change_m, kPositive);
   v("odometry", "max_velocity_change_fraction", c.odometry_checks.max_velocity_change_fraction, kNonNegative);
   v("odometry", "decisive_inlier_share", c.odometry_checks.decisive_inlier_share, Range{0.0, 2.0});
+  v("odometry", "low_overlap_ratio", c.odometry_checks.low_overlap_ratio, Range{0.0, 1.0});
+  v("odometry", "low_overlap_max_ambiguity", c.odometry_checks.low_overlap_max_ambiguity, Range{0.0, 1.0});
+  v("odometry", "low_overlap_max_match_share", c.odometry_checks.low_overlap_max_match_share, Range{0.0, 1.0});
+  v("odometry", "low_overlap_sigma_m", c.odometry_checks.low_overlap_sigma_m, kNonNegative);
+  v("odometry", "low_overlap_sigma_rad", c.odometry_checks.low_overlap_sigma_rad, kNonNegative);
   v("odometry", "fallback_sigma_m", c.fallback.sigma_m, kPositive);
   v("odometry", "fallback_sigma_rad", c.fallback.sigma_rad, kPositive);
   v("loop_closure", "enabled", c.loop_closure.enabled, Range{});

@@ -24,6 +24,7 @@ struct StageTimes {
 enum class FrameStatus {
   first,        ///< the first frame of the session: the origin
   ok,           ///< odometry measured the motion from the previous frame
+  low_overlap,  ///< odometry measured it from a second, looser matching of a low-overlap pair: less certain
   fallback,     ///< odometry failed (FrameResult::fallback_reason); the previous motion was assumed
   lost,         ///< tracking is lost: the pose is unknown until global localization finds it
   relocalized,  ///< global localization found the pose again (tracking resumes)
@@ -45,12 +46,13 @@ struct FrameResult {
   MountState mount;           ///< the camera's roll, pitch and height used for this frame's ground points
   bool mount_estimated = false;  ///< mount was estimated from the images (else the calibrated mount)
   StageTimes times;
-  /// frames.csv's `status`: first | ok | fallback_<reason> (e.g. fallback_too_few_matches) | lost_<reason> (the
+  /// frames.csv's `status`: first | ok | low_overlap | fallback_<reason> (e.g. fallback_too_few_matches) | lost_<reason> (the
   /// frame whose failed odometry lost tracking, e.g. lost_degenerate) | lost (a later frame of a lost segment) | relocalized.
   std::string statusName() const {
     switch (status) {
       case FrameStatus::first: return "first";
       case FrameStatus::ok: return "ok";
+      case FrameStatus::low_overlap: return "low_overlap";
       case FrameStatus::fallback: return std::string("fallback_") + fitStatusName(fallback_reason);
       case FrameStatus::lost: return fallback_reason == FitStatus::ok ? "lost" : std::string("lost_") + fitStatusName(fallback_reason);
       case FrameStatus::relocalized: return "relocalized";

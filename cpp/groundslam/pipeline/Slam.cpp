@@ -72,18 +72,22 @@ FrameResult Slam::process(PreparedFrame prepared) {
     if (!odometry.fallback && artifacts_seen) still = stillFeatures(*previous_, current, odometry.T_prev_curr);
     if (!odometry.fallback && config_.outdoor.estimate_mount) estimateMountOf(*previous_, current, odometry, result);
     result.odometry = odometry.T_prev_curr;
-    if (!odometry.fallback) {
+    if (!odometry.fallback && !odometry.low_overlap) {
       last_good_odometry_ = odometry;
       last_good_odometry_seconds_ = current.timestamp - previous_->timestamp;
     } else {
-      last_good_odometry_seconds_ = 0.0;  // the speed is unknown again: the next motion is not judged by it
+      // The speed is unknown again (a low-overlap motion usually spans a gap): the next motion is not judged by it.
+      last_good_odometry_seconds_ = 0.0;
     }
     if (odometry.fallback && loop_closer_) {
       startSegment(odometry);  // tracking lost: the motion is unknown, global localization will find the pose
     } else {
       addToGraph(odometry);
     }
-    result.status = lost_ ? FrameStatus::lost : odometry.fallback ? FrameStatus::fallback : FrameStatus::ok;
+    result.status = lost_                 ? FrameStatus::lost
+                    : odometry.fallback   ? FrameStatus::fallback
+                    : odometry.low_overlap ? FrameStatus::low_overlap
+                                          : FrameStatus::ok;
     if (odometry.fallback) result.fallback_reason = odometry.fit_status;
     measured_.push_back(!odometry.fallback && !lost_);
   } else if (prior_frames_ > 0) {
@@ -362,9 +366,41 @@ OdometryEdge Slam::estimateOdometry(const Keyframe& previous, const Keyframe& cu
     fit.status = FitStatus::implausible_motion;
   }
 
+  // Too little evidence (not a motion refused for its rivals or its speed) where the overlap fell: a second look.
+  const bool too_little = fit.status == FitStatus::too_few_matches || fit.status == FitStatus::too_few_inliers ||
+                          fit.status == FitStatus::degenerate;
+  const bool overlap_fell = last_good_odometry_ && static_cast<double>(result.matches) <=
+                                                       config_.odometry_checks.low_overlap_max_match_share * last_good_odometry_->matches;
+  if (too_little && overlap_fell) {
+    if (auto second_look = fitLowOverlap(previous, current)) {
+      result.inliers = second_look->first.inliers;
+      OdometryEdge edge{second_look->first.T_target_source, second_look->first.covariance, result.matches, second_look->first.inliers,
+                        FitStatus::ok, false, std::move(second_look->second), second_look->first.rms_residual_m};
+      edge.low_overlap = true;
+      const double sm = config_.odometry_checks.low_overlap_sigma_m, sr = config_.odometry_checks.low_overlap_sigma_rad;
+      edge.covariance += Eigen::Vector3d(sm * sm, sm * sm, sr * sr).asDiagonal();
+      return edge;
+    }
+  }
   OdometryEdge edge{fit.T_target_source, fit.covariance, result.matches, fit.inliers, fit.status, false, std::move(used),
                     fit.rms_residual_m};
   return fit.ok() ? edge : fallbackOdometry(edge);
+}
+
+std::optional<std::pair<RigidEstimate, std::vector<Match>>> Slam::fitLowOverlap(const Keyframe& previous, const Keyframe& current) const {
+  // Not in the paper: at low overlap most of an image's features have no partner, and the ratio test also
+  // throws away true matches whose second-best rival is close. A looser test keeps more of them; the fit is
+  // believed only without a rival transform, which a repeated floor always has.
+  const OdometryChecks& checks = config_.odometry_checks;
+  if (!(checks.low_overlap_ratio > config_.matching.ratio)) return std::nullopt;
+  std::vector<Match> matches = bruteForceMatch(current.features.descriptors, previous.features.descriptors, checks.low_overlap_ratio);
+  if (config_.outdoor.reject_still) {
+    matches = splitStillMatches(matches, current.features, previous.features, config_.outdoor.still_radius_px / config_.camera.fx).moving;
+  }
+  matches = artifact_mask_.withoutArtifacts(matches, current.features);
+  const RigidEstimate fit = fitMatches(matches, previous, current, odometry_fitting_);
+  if (!fit.ok() || fit.ambiguity() > checks.low_overlap_max_ambiguity) return std::nullopt;
+  return std::make_pair(fit, std::move(matches));
 }
 
 bool Slam::plausibleMotion(const Pose2& T_prev_curr, double previous_time, double current_time) const {

@@ -45,6 +45,7 @@ struct OdometryEdge {
   bool fallback = false;  ///< the fit failed and the previous motion was assumed
   std::vector<Match> used;  ///< the matches the fit used (still ones left out)
   double rms_residual_m = 0.0;  ///< of the fit's inliers
+  bool low_overlap = false;  ///< measured by the second, looser matching (OdometryChecks::low_overlap_ratio)
 };
 
 class Slam {
@@ -97,6 +98,8 @@ class Slam {
                            const FitSettings& settings) const;
   /// Matches split into still ones and the rest; when the rest fit a motion that moves the still ones, that fit.
   std::optional<RigidEstimate> fitWithoutStill(const StillSplit& split, const Keyframe& previous, const Keyframe& current) const;
+  /// The second look at a pair whose fit failed: the fit and the matches it used, or nothing.
+  std::optional<std::pair<RigidEstimate, std::vector<Match>>> fitLowOverlap(const Keyframe& previous, const Keyframe& current) const;
   /// The current frame's roll, pitch and height from the odometry's inliers; its points re-projected and the
   /// odometry fitted again with them. Leaves everything as it was when the estimate fails.
   void estimateMountOf(const Keyframe& previous, Keyframe& current, OdometryEdge& odometry, FrameResult& result);
