@@ -126,3 +126,59 @@ TEST(RigidFit, RepetitivePatternIsAmbiguousUntilAPriorPicksTheRepetition) {
   const TransformPrior wrong{Pose2(0.2, 0.2, 1.0), 0.015, 0.05};
   EXPECT_FALSE(fitRigidTransform(target, source, settings, wrong).ok());
 }
+
+TEST(RigidFit, MatchesThatStayedInPlaceMakeNoRival) {
+  // 40 ground matches move with the robot (1.5 cm, 0.5 degree); 25 more are the robot's own artifacts (a
+  // bumper's bolts, lens dirt) spread over the image, staying in place within 0.3 mm, so the zero motion
+  // explains them. That rival is not a repetition of the floor.
+  const Pose2 truth(0.0, -0.015, 0.5 * M_PI / 180.0);
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> ground(-0.07, 0.07);
+  std::normal_distribution<double> noise(0.0, 0.0001), jitter(0.0, 0.0003);
+  std::vector<Eigen::Vector2d> target, source;
+  for (int i = 0; i < 40; ++i) {
+    const Eigen::Vector2d p(ground(rng), ground(rng));
+    source.push_back(p);
+    target.push_back(truth * p + Eigen::Vector2d(noise(rng), noise(rng)));
+  }
+  for (int i = 0; i < 25; ++i) {
+    const Eigen::Vector2d p(ground(rng), ground(rng));
+    source.push_back(p);
+    target.push_back(p + Eigen::Vector2d(jitter(rng), jitter(rng)));
+  }
+  FitSettings settings;
+  settings.measure_ambiguity = true;
+  settings.rival_max_rotation_rad = 1.0 * M_PI / 180.0;  // as odometry measures it: shifted copies only
+  const RigidEstimate counted = fitRigidTransform(target, source, settings);
+  ASSERT_TRUE(counted.ok());
+  EXPECT_GT(counted.ambiguity(), 0.5);  // the artifacts' transform rivals the motion
+  settings.rival_min_motion_m = 0.0026;
+  const RigidEstimate discounted = fitRigidTransform(target, source, settings);
+  ASSERT_TRUE(discounted.ok());
+  EXPECT_LT((discounted.T_target_source.translation() - truth.translation()).norm(), 0.0003);
+  EXPECT_LT(discounted.ambiguity(), 0.1);
+}
+
+TEST(RigidFit, ARepeatedFloorStillHasARivalWhenStillMatchesAreDiscounted) {
+  // The tiles of RepetitivePatternIsAmbiguousUntilAPriorPicksTheRepetition, moved 1 cm: their copies one tile
+  // over moved in the image, so the rival stays.
+  const Pose2 truth(0.01, 0.0, 0.0);
+  std::mt19937 rng(8);
+  std::uniform_real_distribution<double> u(0.0, 0.04);
+  std::normal_distribution<double> noise(0.0, 0.0001);
+  std::vector<Eigen::Vector2d> target, source;
+  for (int i = 0; i < 60; ++i) {
+    const Eigen::Vector2d in_tile(u(rng), u(rng));
+    for (int tile = 0; tile < 3; ++tile) {
+      source.push_back(in_tile + Eigen::Vector2d(0.04 * tile, 0.0));
+      target.push_back(truth * (in_tile + Eigen::Vector2d(0.04 * ((tile + i) % 3), 0.0)) + Eigen::Vector2d(noise(rng), noise(rng)));
+    }
+  }
+  FitSettings settings;
+  settings.measure_ambiguity = true;
+  settings.rival_max_rotation_rad = 1.0 * M_PI / 180.0;
+  settings.rival_min_motion_m = 0.0026;
+  const RigidEstimate fit = fitRigidTransform(target, source, settings);
+  ASSERT_TRUE(fit.ok());
+  EXPECT_GT(fit.ambiguity(), 0.5);
+}

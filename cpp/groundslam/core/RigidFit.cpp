@@ -121,6 +121,20 @@ int supportOf(const Pose2& T, const std::vector<Eigen::Vector2d>& target, const 
   return support;
 }
 
+/// supportOf over the matches whose two points lie more than min_motion apart (those that moved in the image).
+int movingSupportOf(const Pose2& T, const std::vector<Eigen::Vector2d>& target, const std::vector<Eigen::Vector2d>& source,
+                    double threshold, double min_motion) {
+  int support = 0;
+  const double t2 = threshold * threshold, m2 = min_motion * min_motion;
+  const Eigen::Matrix2d R = T.rotation();
+  const Eigen::Vector2d t = T.translation();
+  for (size_t i = 0; i < target.size(); ++i) {
+    if ((source[i] - target[i]).squaredNorm() <= m2) continue;
+    support += (R * source[i] + t - target[i]).squaredNorm() <= t2 ? 1 : 0;
+  }
+  return support;
+}
+
 /// Closed-form least-squares rigid fit (2-D Kabsch); always a proper rotation.
 Pose2 leastSquaresFit(const std::vector<Eigen::Vector2d>& target, const std::vector<Eigen::Vector2d>& source,
                       const std::vector<int>& subset) {
@@ -195,8 +209,14 @@ RansacResult ransac(const std::vector<Eigen::Vector2d>& target, const std::vecto
     const double miss = std::max(1e-12, 1.0 - w * w);
     needed = std::min(settings.ransac_iterations, static_cast<int>(std::ceil(std::log(1e-3) / std::log(miss))) + 1);
   }
+  // Strongest first: once a hypothesis's whole support cannot beat the rival found, none after it can.
+  std::sort(tried.begin(), tried.end(), [](const Hypothesis& a, const Hypothesis& b) { return a.support > b.support; });
   for (const Hypothesis& h : tried) {
-    if (farApart(h.T, result.best, settings)) result.rival_support = std::max(result.rival_support, h.support);
+    if (h.support <= result.rival_support) break;
+    if (!farApart(h.T, result.best, settings)) continue;
+    result.rival_support = std::max(result.rival_support, settings.rival_min_motion_m > 0.0
+                                                              ? movingSupportOf(h.T, target, source, thr, settings.rival_min_motion_m)
+                                                              : h.support);
   }
   return result;
 }

@@ -28,6 +28,10 @@ struct FitSettings {
   /// When set, a rival must be shifted by over 1 cm with a rotation within this (a repetition of the floor);
   /// unset, any transform over 1 cm or 3 degrees away is a rival.
   std::optional<double> rival_max_rotation_rad;
+  /// > 0: a rival's support counts only matches whose two points lie farther apart than this. Matches that
+  /// stayed (nearly) in place are what the camera's own artifacts give (a shadow's edge, glare, a bumper), and
+  /// a transform they support is not a repetition of the floor.
+  double rival_min_motion_m = 0.0;
 };
 
 /// What is already believed about the transform: RANSAC then only considers hypotheses within the window.

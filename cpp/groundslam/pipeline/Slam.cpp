@@ -43,6 +43,10 @@ Slam::Slam(const Config& config, std::shared_ptr<const Vocabulary> vocabulary)
   mount_baseline_m_ = config.outdoor.baseline_fraction * std::min(k.width, k.height) * ground_sample_m_;
   mount_pair_radius_m_ = config.outdoor.pair_radius_px * ground_sample_m_;
   odometry_fitting_.rival_max_rotation_rad = 1.0 * M_PI / 180.0;
+  // Not in the paper: a rival made of matches that stayed in place is the robot's own artifacts, not the floor.
+  if (config.outdoor.reject_still) {
+    odometry_fitting_.rival_min_motion_m = config.outdoor.moved_factor * config.outdoor.still_radius_px * ground_sample_m_;
+  }
   if (config.loop_closure.enabled && vocabulary && !vocabulary->empty()) {
     loop_closer_.emplace(config.loop_closure, std::move(vocabulary), config.matching, config.odometry, config.localization);
   }
