@@ -94,23 +94,34 @@ TEST(RigidFit, DegenerateInputsFailAsData) {
   EXPECT_FALSE(fitRigidTransform(line.target, noise.source, settings).ok());
 }
 
-TEST(RigidFit, RepetitivePatternIsAmbiguousUntilAPriorPicksTheRepetition) {
-  // A floor of identical 4 cm tiles: each point also matches its copies one tile away, so the matches
-  // support the true motion and the tile-shifted ones about equally.
-  const Pose2 truth(0.003, 0.001, 0.02);
+namespace {
+
+/// A floor of identical 4 cm tiles moved by `truth`: each of 60 points in a row of three tiles matches one of
+/// its copies (the matcher cannot tell them apart), so the true motion and the tile-shifted ones are supported
+/// about equally.
+Correspondences tiledCorrespondences(const Pose2& truth) {
   std::mt19937 rng(8);
   std::uniform_real_distribution<double> u(0.0, 0.04);
   std::normal_distribution<double> noise(0.0, 0.0001);
-  std::vector<Eigen::Vector2d> target, source;
+  Correspondences c;
   for (int i = 0; i < 60; ++i) {
     const Eigen::Vector2d in_tile(u(rng), u(rng));
     for (int tile = 0; tile < 3; ++tile) {
-      const Eigen::Vector2d p = in_tile + Eigen::Vector2d(0.04 * tile, 0.0);
-      const int matched_tile = (tile + i) % 3;  // the matcher cannot tell the copies apart
-      source.push_back(p);
-      target.push_back(truth * (in_tile + Eigen::Vector2d(0.04 * matched_tile, 0.0)) + Eigen::Vector2d(noise(rng), noise(rng)));
+      const int matched_tile = (tile + i) % 3;
+      c.source.push_back(in_tile + Eigen::Vector2d(0.04 * tile, 0.0));
+      c.target.push_back(truth * (in_tile + Eigen::Vector2d(0.04 * matched_tile, 0.0)) + Eigen::Vector2d(noise(rng), noise(rng)));
     }
   }
+  return c;
+}
+
+}  // namespace
+
+TEST(RigidFit, RepetitivePatternIsAmbiguousUntilAPriorPicksTheRepetition) {
+  const Pose2 truth(0.003, 0.001, 0.02);
+  const Correspondences tiles = tiledCorrespondences(truth);
+  const std::vector<Eigen::Vector2d>& target = tiles.target;
+  const std::vector<Eigen::Vector2d>& source = tiles.source;
   FitSettings settings;
   settings.measure_ambiguity = true;
   const RigidEstimate blind = fitRigidTransform(target, source, settings);
@@ -160,25 +171,13 @@ TEST(RigidFit, MatchesThatStayedInPlaceMakeNoRival) {
 }
 
 TEST(RigidFit, ARepeatedFloorStillHasARivalWhenStillMatchesAreDiscounted) {
-  // The tiles of RepetitivePatternIsAmbiguousUntilAPriorPicksTheRepetition, moved 1 cm: their copies one tile
-  // over moved in the image, so the rival stays.
-  const Pose2 truth(0.01, 0.0, 0.0);
-  std::mt19937 rng(8);
-  std::uniform_real_distribution<double> u(0.0, 0.04);
-  std::normal_distribution<double> noise(0.0, 0.0001);
-  std::vector<Eigen::Vector2d> target, source;
-  for (int i = 0; i < 60; ++i) {
-    const Eigen::Vector2d in_tile(u(rng), u(rng));
-    for (int tile = 0; tile < 3; ++tile) {
-      source.push_back(in_tile + Eigen::Vector2d(0.04 * tile, 0.0));
-      target.push_back(truth * (in_tile + Eigen::Vector2d(0.04 * ((tile + i) % 3), 0.0)) + Eigen::Vector2d(noise(rng), noise(rng)));
-    }
-  }
+  // Tiles moved 1 cm: their copies one tile over moved in the image, so the rival stays.
+  const Correspondences tiles = tiledCorrespondences(Pose2(0.01, 0.0, 0.0));
   FitSettings settings;
   settings.measure_ambiguity = true;
   settings.rival_max_rotation_rad = 1.0 * M_PI / 180.0;
   settings.rival_min_motion_m = 0.0026;
-  const RigidEstimate fit = fitRigidTransform(target, source, settings);
+  const RigidEstimate fit = fitRigidTransform(tiles.target, tiles.source, settings);
   ASSERT_TRUE(fit.ok());
   EXPECT_GT(fit.ambiguity(), 0.5);
 }

@@ -110,26 +110,16 @@ std::vector<int> inliersOf(const Pose2& T, const std::vector<Eigen::Vector2d>& t
   return inliers;
 }
 
-/// How many matches `T` maps within `threshold` (inliersOf's size, without building the list).
+/// How many matches `T` maps within `threshold` (inliersOf's size, without building the list); with
+/// min_motion > 0, only among the matches whose two points lie farther apart than that (moved in the image).
 int supportOf(const Pose2& T, const std::vector<Eigen::Vector2d>& target, const std::vector<Eigen::Vector2d>& source,
-              double threshold) {
-  int support = 0;
-  const double t2 = threshold * threshold;
-  const Eigen::Matrix2d R = T.rotation();
-  const Eigen::Vector2d t = T.translation();
-  for (size_t i = 0; i < target.size(); ++i) support += (R * source[i] + t - target[i]).squaredNorm() <= t2 ? 1 : 0;
-  return support;
-}
-
-/// supportOf over the matches whose two points lie more than min_motion apart (those that moved in the image).
-int movingSupportOf(const Pose2& T, const std::vector<Eigen::Vector2d>& target, const std::vector<Eigen::Vector2d>& source,
-                    double threshold, double min_motion) {
+              double threshold, double min_motion = 0.0) {
   int support = 0;
   const double t2 = threshold * threshold, m2 = min_motion * min_motion;
   const Eigen::Matrix2d R = T.rotation();
   const Eigen::Vector2d t = T.translation();
   for (size_t i = 0; i < target.size(); ++i) {
-    if ((source[i] - target[i]).squaredNorm() <= m2) continue;
+    if (min_motion > 0.0 && (source[i] - target[i]).squaredNorm() <= m2) continue;
     support += (R * source[i] + t - target[i]).squaredNorm() <= t2 ? 1 : 0;
   }
   return support;
@@ -215,7 +205,7 @@ RansacResult ransac(const std::vector<Eigen::Vector2d>& target, const std::vecto
     if (h.support <= result.rival_support) break;
     if (!farApart(h.T, result.best, settings)) continue;
     result.rival_support = std::max(result.rival_support, settings.rival_min_motion_m > 0.0
-                                                              ? movingSupportOf(h.T, target, source, thr, settings.rival_min_motion_m)
+                                                              ? supportOf(h.T, target, source, thr, settings.rival_min_motion_m)
                                                               : h.support);
   }
   return result;

@@ -27,6 +27,11 @@ GraphEdge informationFreeEdge(int from, int to, const Pose2& T_from_to) {
   return {from, to, T_from_to, Eigen::Vector3d(1e-4, 1e-4, 1e-4).asDiagonal(), false};
 }
 
+/// diag(sigma_m^2, sigma_m^2, sigma_rad^2): uncertainty added to a motion's covariance.
+Eigen::Matrix3d sigmaCovariance(double sigma_m, double sigma_rad) {
+  return Eigen::Vector3d(sigma_m * sigma_m, sigma_m * sigma_m, sigma_rad * sigma_rad).asDiagonal();
+}
+
 }  // namespace
 
 Slam::Slam(const Config& config, std::shared_ptr<const Vocabulary> vocabulary)
@@ -381,8 +386,7 @@ OdometryEdge Slam::estimateOdometry(const Keyframe& previous, const Keyframe& cu
       OdometryEdge edge{second_look->first.T_target_source, second_look->first.covariance, result.matches, second_look->first.inliers,
                         FitStatus::ok, false, std::move(second_look->second), second_look->first.rms_residual_m};
       edge.low_overlap = true;
-      const double sm = config_.odometry_checks.low_overlap_sigma_m, sr = config_.odometry_checks.low_overlap_sigma_rad;
-      edge.covariance += Eigen::Vector3d(sm * sm, sm * sm, sr * sr).asDiagonal();
+      edge.covariance += sigmaCovariance(config_.odometry_checks.low_overlap_sigma_m, config_.odometry_checks.low_overlap_sigma_rad);
       return edge;
     }
   }
@@ -425,8 +429,7 @@ OdometryEdge Slam::fallbackOdometry(OdometryEdge failed) const {
     failed.T_prev_curr = last_good_odometry_->T_prev_curr;
     failed.covariance = last_good_odometry_->covariance;
   }
-  const double sm = config_.fallback.sigma_m, sr = config_.fallback.sigma_rad;
-  failed.covariance += Eigen::Vector3d(sm * sm, sm * sm, sr * sr).asDiagonal();
+  failed.covariance += sigmaCovariance(config_.fallback.sigma_m, config_.fallback.sigma_rad);
   return failed;
 }
 
