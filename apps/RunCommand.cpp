@@ -8,6 +8,7 @@
 #include "RunOutputs.hpp"
 #include "StopSignals.hpp"
 #include "groundslam/eval/LoopClosureMetrics.hpp"
+#include "groundslam/eval/NumberText.hpp"
 #include "groundslam/eval/TrajectoryMetrics.hpp"
 #include "groundslam/io/ConfigYaml.hpp"
 #include "groundslam/io/Dataset.hpp"
@@ -78,7 +79,8 @@ RunProgress runInto(const std::string& folder, const RunOptions& o, const Datase
   }
   writeNewFile(file("config.yaml"), configToYaml(settings));
   std::vector<double> load_ms;
-  const std::vector<FrameResult> results = processAll(dataset, config, slam, load_ms);
+  std::vector<FrameResult> results = processAll(dataset, config, slam, load_ms);
+  for (FrameResult& r : results) r.mount = slam.finalMount(r.index);  // the whole run's tilt estimate
   // A video's or camera's length is what was read (an interrupted stream is still a complete run of it).
   const size_t total = dataset.isVideo() ? results.size() : dataset.frames.size();
   const RunProgress progress{results.size(), total};
@@ -94,6 +96,13 @@ RunProgress runInto(const std::string& folder, const RunOptions& o, const Datase
             << countStatus(results, FrameStatus::fallback) << " with fallback odometry (pose assumed from earlier motion), "
             << countStatus(results, FrameStatus::lost) << " lost (tracking lost, not yet relocalized), " << countStatus(results, FrameStatus::relocalized)
             << " relocalizations, " << countLoopClosures(results) << " loop closures\n";
+  if (const auto rocking = slam.mountRocking()) {
+    std::cout << "camera mount solved over the whole run: tilt " << textNumber(rocking->tilt.sigma, 3, 180.0 / M_PI)
+              << " deg RMS per axis (frame-to-frame correlation " << textNumber(rocking->tilt.correlation, 2) << "), height "
+              << textNumber(rocking->height.sigma, 2, 1000.0) << " mm RMS (correlation " << textNumber(rocking->height.correlation, 2)
+              << ")" << (slam.mountSmoothed() ? "\n" : ": not used (the frames keep the mounts they were processed with)\n");
+  }
+
   std::vector<std::optional<CandidateTruth>> truths;
   const Trajectory groundtruth = dataset.hasGroundTruth() ? groundTruthOf(dataset, config.camera, settings.inputs.map_meters_per_pixel) : Trajectory{};
   if (dataset.hasGroundTruth() && groundtruth.empty()) {

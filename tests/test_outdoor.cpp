@@ -10,6 +10,7 @@
 #include "groundslam/core/MountEstimation.hpp"
 #include "groundslam/core/MountPairCost.hpp"
 #include "groundslam/core/StillFeatures.hpp"
+#include "groundslam/core/MountSmoother.hpp"
 #include "groundslam/eval/TrajectoryMetrics.hpp"
 #include "groundslam/pipeline/Slam.hpp"
 #include "groundslam/sim/Simulator.hpp"
@@ -77,6 +78,110 @@ TEST(MountEstimation, RecoversTiltAndHeightOfATiltedCamera) {
                                             Pose2(), MountEstimationSettings{1e-9, 1e-9, 1e-9, 0.0002, 300, 30});
   ASSERT_TRUE(level.ok);
   EXPECT_GT((level.T_reference_current.translation() - motion.translation()).norm(), 0.002);
+}
+
+namespace {
+
+struct ChainResult {
+  double smoothed_tilt_deg = 0.0;  ///< RMS error of the smoothed tilts, per axis
+  double single_tilt_deg = 0.0;    ///< of each frame's own estimate (its references believed at the calibration)
+  double smoothed_height_mm = 0.0;
+  double single_height_mm = 0.0;
+  MountRocking rocking;            ///< the priors chosen
+};
+
+/// A chain of frames 1 cm apart whose mount rocks with amplitude `rocking_deg` and bounces with `bounce_m` (sines),
+/// each frame's mount estimated from the previous frame and the fifth one back with 0.35 px keypoint noise, then
+/// the whole chain smoothed.
+ChainResult smoothChain(double rocking_deg, double bounce_m, int frames) {
+  std::vector<MountState> truth;
+  for (int i = 0; i < frames; ++i) {
+    truth.push_back({rocking_deg * kDeg * std::sin(0.3 * i), rocking_deg * kDeg * std::cos(0.23 * i + 0.4), 0.25 + bounce_m * std::sin(0.17 * i + 1.0)});
+  }
+  std::vector<FrameMountFactor> factors;
+  double single_tilt2 = 0.0, single_height2 = 0.0;
+  for (int i = 1; i < frames; ++i) {
+    // The previous frame and, as in the pipeline, one 5 cm back (the robot drives straight, 1 cm per frame).
+    std::vector<MountObservation> observations;
+    std::vector<int> frame_of;
+    for (int back : {5, 1}) {
+      if (i - back < 0) continue;
+      const Pose2 motion(0.01 * back, 0.0, 0.0);
+      const RayPairs pairs = observe(truth[size_t(i - back)], truth[size_t(i)], motion, 0.35, 100 + unsigned(10 * i + back));
+      // Each reference believed at the calibrated mount, as a first estimate would: the factor is the data's own.
+      observations.push_back({pairs.reference, pairs.current, MountState{0.0, 0.0, 0.25}, motion});
+      frame_of.push_back(i - back);
+    }
+    const MountEstimate e = estimateMount(observations, defaultCameraMount(0.25), {});
+    if (!e.ok) continue;
+    single_tilt2 += std::pow(e.current.roll_rad - truth[size_t(i)].roll_rad, 2) + std::pow(e.current.pitch_rad - truth[size_t(i)].pitch_rad, 2);
+    single_height2 += std::pow(e.current.height_m - truth[size_t(i)].height_m, 2);
+    FrameMountFactor factor{{i}, e.factor};
+    for (int k : e.factor.observations) factor.frames.push_back(frame_of[size_t(k)]);
+    factors.push_back(factor);
+  }
+  MountSmoothingSettings settings;
+  settings.max_tilt_sigma_rad = 1.0 * kDeg;
+  const MountSmoothing smoothing = smoothMounts(frames, factors, settings);
+  ChainResult result;
+  if (smoothing.states.size() != size_t(frames)) return result;
+  double tilt2 = 0.0, height2 = 0.0;
+  for (int i = 0; i < frames; ++i) {
+    const MountState& s = smoothing.states[size_t(i)];
+    tilt2 += std::pow(s.roll_rad - truth[size_t(i)].roll_rad, 2) + std::pow(s.pitch_rad - truth[size_t(i)].pitch_rad, 2);
+    height2 += std::pow(s.height_m - truth[size_t(i)].height_m, 2);
+  }
+  result.smoothed_tilt_deg = std::sqrt(tilt2 / (2.0 * frames)) / kDeg;
+  result.single_tilt_deg = std::sqrt(single_tilt2 / (2.0 * (frames - 1))) / kDeg;
+  result.smoothed_height_mm = 1000.0 * std::sqrt(height2 / frames);
+  result.single_height_mm = 1000.0 * std::sqrt(single_height2 / (frames - 1));
+  result.rocking = smoothing.rocking;
+  return result;
+}
+
+}  // namespace
+
+TEST(MountSmoother, TheWholeChainKnowsEachFrameBetterThanItsOwnEstimate) {
+  // Measured: each frame's own estimate (references believed at the calibration) is 0.41 degrees and 1.45 mm
+  // off; the smoothed chain 0.049 degrees and 0.59 mm, with priors 0.25 degrees (correlation 0.9) and 0.75 mm.
+  const ChainResult chain = smoothChain(0.5, 0.002, 120);
+  EXPECT_GT(chain.single_tilt_deg, 0.2);
+  EXPECT_LT(chain.smoothed_tilt_deg, 0.1);
+  EXPECT_LT(chain.smoothed_height_mm, 0.5 * chain.single_height_mm);
+  EXPECT_LT(chain.smoothed_height_mm, 1.0);
+  EXPECT_GE(chain.rocking.tilt.sigma / kDeg, 0.1);  // the evidence says the mount rocks
+  EXPECT_GE(chain.rocking.height.sigma, 0.0003);    // and bounces
+}
+
+TEST(MountSmoother, ARigidMountStaysAtTheCalibration) {
+  // Measured: 0.0013 degrees and 0.009 mm, with priors of 0.008 degrees and 0.023 mm (each frame's own
+  // estimate: 0.09 degrees, 0.06 mm); with the widest priors the chain would follow the estimates' noise.
+  const ChainResult rigid = smoothChain(0.0, 0.0, 120);
+  EXPECT_LT(rigid.smoothed_tilt_deg, 0.02);
+  EXPECT_LT(rigid.smoothed_height_mm, 0.03);
+  EXPECT_LT(rigid.rocking.tilt.sigma / kDeg, 0.05);
+  EXPECT_LT(rigid.rocking.height.sigma, 0.0001);
+}
+
+TEST(MountSmoother, BadFactorsAreIgnoredAndNoFramesIsNoSolution) {
+  FrameMountFactor outside{{5, 4}, {}};
+  outside.factor.information = Eigen::MatrixXd::Identity(6, 6);
+  outside.factor.gradient = Eigen::VectorXd::Zero(6);
+  outside.factor.linearisation = Eigen::VectorXd::Constant(6, 0.01);
+  FrameMountFactor wrong_size{{1, 0}, {}};
+  wrong_size.factor.information = Eigen::MatrixXd::Identity(4, 4);
+  MountSmoothingSettings settings;
+  settings.nominal_height_m = 0.3;
+  const MountSmoothing smoothing = smoothMounts(3, {outside, wrong_size}, settings);
+  ASSERT_EQ(smoothing.states.size(), 3u);
+  for (const MountState& m : smoothing.states) {
+    EXPECT_EQ(m.roll_rad, 0.0);
+    EXPECT_EQ(m.pitch_rad, 0.0);
+    EXPECT_DOUBLE_EQ(m.height_m, 0.3);
+  }
+  EXPECT_TRUE(smoothMounts(0, {}, settings).states.empty());
+  settings.max_tilt_sigma_rad = std::nan("");
+  EXPECT_TRUE(smoothMounts(3, {}, settings).states.empty());
 }
 
 TEST(MountEstimation, AReferenceWithoutPairsIsLeftOut) {
@@ -322,18 +427,20 @@ sim::SimulationSettings rockingSequence(bool outdoor) {
 }
 
 /// Odometry alone (no loop closure) over a simulated sequence, checked frame by frame.
-OutdoorRun runOdometry(const sim::SimulationSettings& s, double drop_probability, bool estimate_mount) {
+OutdoorRun runOdometry(const sim::SimulationSettings& s, double drop_probability, bool estimate_mount, bool smooth_mount = false) {
   const sim::SequenceSimulator simulator(s);
   const std::vector<bool> dropped = sim::droppedFrames(simulator.frameCount(), drop_probability, 4, s.seed);
   Config config;
   config.camera = cameraConfigOf(s.camera, s.mounting_height_m);
   config.outdoor.estimate_mount = estimate_mount;
+  config.outdoor.smooth_mount = smooth_mount;
   Slam slam(config, nullptr);
   OutdoorRun run;
   Trajectory truth;
   std::optional<int> previous;
   double tilt_error2 = 0.0, tilt2 = 0.0;
   int estimated = 0;
+  std::vector<std::pair<int, int>> estimated_frames;  // (result index, image index)
   for (int i = 0; i < simulator.frameCount(); ++i) {
     if (dropped[static_cast<size_t>(i)]) continue;
     const FrameResult r = slam.process(simulator.renderFrame(i), i);
@@ -346,13 +453,17 @@ OutdoorRun runOdometry(const sim::SimulationSettings& s, double drop_probability
         ++run.wrong_ok;
       }
     }
-    if (r.mount_estimated) {
-      const Eigen::Vector3d true_mount = simulator.mountStateAt(i);
-      tilt_error2 += std::pow(r.mount.roll_rad - true_mount.x(), 2) + std::pow(r.mount.pitch_rad - true_mount.y(), 2);
-      tilt2 += true_mount.x() * true_mount.x() + true_mount.y() * true_mount.y();
-      ++estimated;
-    }
+    if (r.mount_estimated) estimated_frames.push_back({r.index, i});
     previous = i;
+  }
+  slam.finish();
+  // The tilt as the run ends with it: smoothed over the whole run, or each frame's own estimate.
+  for (const auto& [index, image] : estimated_frames) {
+    const MountState mount = slam.finalMount(index);
+    const Eigen::Vector3d true_mount = simulator.mountStateAt(image);
+    tilt_error2 += std::pow(mount.roll_rad - true_mount.x(), 2) + std::pow(mount.pitch_rad - true_mount.y(), 2);
+    tilt2 += true_mount.x() * true_mount.x() + true_mount.y() * true_mount.y();
+    ++estimated;
   }
   run.ate_m = evaluateTrajectory(truth, slam.trajectory()).metrics.ate_rmse_m;
   run.tilt_error_rad = std::sqrt(tilt_error2 / std::max(1, 2 * estimated));
@@ -370,6 +481,18 @@ TEST(OutdoorSequence, MountEstimateReducesTheRockingError) {
   EXPECT_EQ(with.wrong_ok, 0);
   EXPECT_LT(with.ate_m, 0.95 * without.ate_m);
   EXPECT_LT(with.tilt_error_rad, 0.85 * with.tilt_rad);
+}
+
+TEST(OutdoorSequence, MountSolvedOverTheWholeRunHalvesTheRockingError) {
+  // Measured: ATE 1.43 mm and tilt error 0.135 degrees with the mount solved over the run, against 2.75 mm and
+  // 0.36 degrees with each frame's own estimate (the true tilt: 0.50 degrees RMS, height bouncing 2 mm).
+  const OutdoorRun smoothed = runOdometry(rockingSequence(false), 0.0, true, true);
+  const OutdoorRun per_frame = runOdometry(rockingSequence(false), 0.0, true, false);
+  EXPECT_LT(smoothed.ate_m, 0.7 * per_frame.ate_m);
+  EXPECT_LT(smoothed.ate_m, 0.0018);
+  EXPECT_LT(smoothed.tilt_error_rad, 0.5 * per_frame.tilt_error_rad);
+  EXPECT_LT(smoothed.tilt_error_rad, 0.5 * smoothed.tilt_rad);
+  EXPECT_EQ(smoothed.wrong_ok, per_frame.wrong_ok);  // the frames' own motions are what they were
 }
 
 TEST(OutdoorSequence, TrackedThroughArtifactsSharpTurnsAndDroppedFrames) {

@@ -184,7 +184,7 @@ PYBIND11_MODULE(groundslam, m) {
       .def("finish", [](PySlam& s) {
         const std::lock_guard<std::mutex> guard(s.lock);
         s.slam.finish();
-      }, "Optimises the whole graph; call after the last image")
+      }, "Optimises the whole graph and solves the camera tilt over the whole run; call after the last image")
       .def("trajectory", [](PySlam& s) {
         const std::lock_guard<std::mutex> guard(s.lock);
         return trajectoryArray(s.slam.trajectory());

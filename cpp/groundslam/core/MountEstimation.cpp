@@ -154,6 +154,76 @@ class MountProblem {
     return true;
   }
 
+  /// The data's part of the problem at x with every state free, the references' heights too (see MountFactor):
+  /// the motions marginalised out (Schur complement), scaled to the residuals' variance.
+  MountFactor factorAt(const Eigen::VectorXd& x, double residual_variance) const {
+    // Parameters: the current state (3), then per slot the reference's state (3) and the motion (3).
+    const int n = 3 + 6 * slots();
+    Eigen::MatrixXd H = Eigen::MatrixXd::Zero(n, n);
+    Eigen::VectorXd g = Eigen::VectorXd::Zero(n), linearisation(3 + 3 * slots());
+    const MountAngles current(x.data());
+    linearisation.head<3>() = x.head<3>();
+    std::vector<MountAngles> references;
+    for (size_t j = 0; j < slots_.size(); ++j) {
+      const int at = 3 + 5 * static_cast<int>(j);
+      const double state[3] = {x[at], x[at + 1], slots_[j].reference_height};
+      references.emplace_back(state);
+      linearisation.segment<3>(3 + 3 * static_cast<Eigen::Index>(j)) << x[at], x[at + 1], slots_[j].reference_height;
+    }
+    Eigen::Matrix<double, 2, 3> d_reference, d_current, d_motion;
+    Eigen::Matrix<double, 2, 9> J;
+    for (const auto& [slot, pair] : pairs_) {
+      const int at = 3 + 5 * slot;
+      const double theta = x[at + 4];
+      const Eigen::Vector2d r = pair.evaluate(references[static_cast<size_t>(slot)], current, x.data() + at + 2, std::cos(theta),
+                                              std::sin(theta), &d_reference, &d_current, &d_motion);
+      const double s = r.squaredNorm();
+      const double w = s <= kHuberScale * kHuberScale ? 1.0 : kHuberScale / std::sqrt(s);
+      J << d_current, d_reference, d_motion;
+      const int base = 3 + 6 * slot;
+      const int index[9] = {0, 1, 2, base, base + 1, base + 2, base + 3, base + 4, base + 5};
+      const Eigen::Matrix<double, 9, 9> JtJ = w * J.transpose() * J;
+      const Eigen::Matrix<double, 9, 1> Jtr = w * J.transpose() * r;
+      for (int a = 0; a < 9; ++a) {
+        g[index[a]] += Jtr[a];
+        for (int b = 0; b < 9; ++b) H(index[a], index[b]) += JtJ(a, b);
+      }
+    }
+    std::vector<int> kept = {0, 1, 2}, marginalised;
+    for (int j = 0; j < slots(); ++j) {
+      kept.insert(kept.end(), {3 + 6 * j, 4 + 6 * j, 5 + 6 * j});
+      marginalised.insert(marginalised.end(), {6 + 6 * j, 7 + 6 * j, 8 + 6 * j});
+    }
+    MountFactor factor;
+    const auto k = static_cast<Eigen::Index>(kept.size()), m = static_cast<Eigen::Index>(marginalised.size());
+    Eigen::MatrixXd Hkk(k, k), Hkm(k, m), Hmm(m, m);
+    Eigen::VectorXd gk(k), gm(m);
+    for (Eigen::Index a = 0; a < k; ++a) {
+      gk[a] = g[kept[static_cast<size_t>(a)]];
+      for (Eigen::Index b = 0; b < k; ++b) Hkk(a, b) = H(kept[static_cast<size_t>(a)], kept[static_cast<size_t>(b)]);
+      for (Eigen::Index b = 0; b < m; ++b) Hkm(a, b) = H(kept[static_cast<size_t>(a)], marginalised[static_cast<size_t>(b)]);
+    }
+    for (Eigen::Index a = 0; a < m; ++a) {
+      gm[a] = g[marginalised[static_cast<size_t>(a)]];
+      for (Eigen::Index b = 0; b < m; ++b) Hmm(a, b) = H(marginalised[static_cast<size_t>(a)], marginalised[static_cast<size_t>(b)]);
+    }
+    const Eigen::LDLT<Eigen::MatrixXd> solver(Hmm);
+    if (solver.info() != Eigen::Success) return factor;
+    const Eigen::MatrixXd HkmHmmInv = solver.solve(Hkm.transpose()).transpose();
+    if (!HkmHmmInv.allFinite()) return factor;
+    // The residuals are ground distances, which shrink with a common scale of every height (and of the motion):
+    // left in, that direction would pull all heights toward zero. Two views say nothing about it; it is
+    // projected out, and the prior alone keeps the heights' level.
+    Eigen::VectorXd scale = Eigen::VectorXd::Zero(k);
+    for (Eigen::Index a = 2; a < k; a += 3) scale[a] = linearisation[a];
+    scale.normalize();
+    const Eigen::MatrixXd P = Eigen::MatrixXd::Identity(k, k) - scale * scale.transpose();
+    factor.information = P * (Hkk - HkmHmmInv * Hkm.transpose()) * P / residual_variance;
+    factor.gradient = P * (gk - HkmHmmInv * gm) / residual_variance;
+    factor.linearisation = linearisation;
+    return factor;
+  }
+
  private:
   const MountEstimationSettings& settings_;
   Eigen::Vector3d current_mean_, current_sigma_;
@@ -207,6 +277,10 @@ MountEstimate estimateMount(const std::vector<MountObservation>& observations, c
   const double residual_variance = std::max(1.0, 2.0 * final_cost / dof);
   estimate.tilt_covariance = state_covariance.topLeftCorner<2, 2>() * residual_variance;
   estimate.height_variance = state_covariance(2, 2) * residual_variance;
+  estimate.factor = problem.factorAt(solution, residual_variance);
+  for (size_t k = 0; k < observations.size(); ++k) {
+    if (slot_of[k] >= 0) estimate.factor.observations.push_back(static_cast<int>(k));
+  }
   estimate.ok = true;
   estimate.current = {solution[0], solution[1], solution[2]};
   const MountObservation& o = observations.front();

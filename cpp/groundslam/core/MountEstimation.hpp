@@ -39,6 +39,17 @@ struct MountEstimationSettings {
   int min_pairs = 30;                  ///< fewer pairs: no estimate
 };
 
+/// What one estimate says about the true states of its frames, the motions marginalised out and no prior
+/// included: the cost 1/2 d^T information d + gradient^T d, d = states - linearisation, with states = (roll,
+/// pitch, height) of the current frame, then of each reference in `observations` order (those with pairs). Two
+/// views fix the rotation between them well, the plane's orientation and the heights' common scale poorly:
+/// `information` is close to singular along those.
+struct MountFactor {
+  std::vector<int> observations;  ///< which observation each reference block is
+  Eigen::VectorXd linearisation, gradient;
+  Eigen::MatrixXd information;
+};
+
 struct MountEstimate {
   bool ok = false;
   MountState current;             ///< the current frame's state
@@ -47,6 +58,7 @@ struct MountEstimate {
   Eigen::Matrix2d tilt_covariance = Eigen::Matrix2d::Identity();  ///< of the current (roll, pitch), rad^2
   double height_variance = 1.0;   ///< of the current height, m^2
   int pairs = 0;
+  MountFactor factor;
 };
 
 /// Matched normalised camera rays of a reference frame and the current one (ray i of each sees the same

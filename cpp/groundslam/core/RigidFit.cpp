@@ -308,4 +308,12 @@ RigidEstimate refineRigidTransform(const std::vector<Eigen::Vector2d>& target, c
   return estimate;
 }
 
+Pose2 leastSquaresRigid(const std::vector<Eigen::Vector2d>& target, const std::vector<Eigen::Vector2d>& source) {
+  const size_t n = std::min(target.size(), source.size());
+  if (n == 0) return Pose2();
+  std::vector<int> all(n);
+  for (size_t i = 0; i < n; ++i) all[i] = static_cast<int>(i);
+  return leastSquaresFit(target, source, all);
+}
+
 }  // namespace groundslam

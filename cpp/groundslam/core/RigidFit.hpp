@@ -75,4 +75,8 @@ RigidEstimate fitRigidTransform(const std::vector<Eigen::Vector2d>& target, cons
 RigidEstimate refineRigidTransform(const std::vector<Eigen::Vector2d>& target, const std::vector<Eigen::Vector2d>& source,
                                    const Pose2& initial, const FitSettings& settings);
 
+/// The least-squares T with target[i] ~ T * source[i] over all pairs (2-D Kabsch, no robust loss): for exact
+/// correspondences such as one image's points projected two ways. Identity when there are none.
+Pose2 leastSquaresRigid(const std::vector<Eigen::Vector2d>& target, const std::vector<Eigen::Vector2d>& source);
+
 }  // namespace groundslam

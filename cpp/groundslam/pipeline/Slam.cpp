@@ -39,7 +39,8 @@ Slam::Slam(const Config& config, std::shared_ptr<const Vocabulary> vocabulary)
       odometry_fitting_(config.odometry),
       preparer_(config),
       matcher_(config.matching),
-      calibrated_mount_(cameraModelFrom(config.camera).T_robot_camera()),
+      camera_(cameraModelFrom(config.camera)),
+      calibrated_mount_(camera_.T_robot_camera()),
       ground_sample_m_(cameraModelFrom(config.camera).groundSampleDistance()),
       artifact_mask_(intrinsicsOf(config.camera), config.outdoor.mask),
       graph_(config.graph.solver) {
@@ -112,6 +113,8 @@ FrameResult Slam::process(PreparedFrame prepared) {
   }
 
   result.mount = current.mount;
+  if (used_mounts_.size() <= static_cast<size_t>(frame)) used_mounts_.resize(static_cast<size_t>(frame) + 1, calibratedState(calibrated_mount_));
+  used_mounts_[static_cast<size_t>(frame)] = current.mount;
   result.artifact_cells = artifact_mask_.artifactCells();
 
   // §III-C: loop closures through the three gates become graph edges; the graph is optimised (LM). What
@@ -165,6 +168,7 @@ Keyframe Slam::groundOf(const Keyframe& current, const std::vector<Match>& still
 void Slam::finish() {
   FrameResult ignored;
   optimiseIfDue(ignored, true);
+  if (config_.outdoor.estimate_mount && config_.outdoor.smooth_mount) smoothMount();
 }
 
 void Slam::addToGraph(const OdometryEdge& odometry) {
@@ -436,7 +440,8 @@ OdometryEdge Slam::fallbackOdometry(OdometryEdge failed) const {
 Trajectory Slam::trajectory() const {
   Trajectory trajectory;
   for (size_t i = static_cast<size_t>(prior_frames_); i < graph_.poses().size(); ++i) {
-    trajectory.push_back({timestamps_[i], graph_.poses()[i], measured_[i]});
+    const Pose2 pose = i < mount_corrections_.size() ? graph_.poses()[i] * mount_corrections_[i] : graph_.poses()[i];
+    trajectory.push_back({timestamps_[i], pose, measured_[i]});
   }
   return trajectory;
 }

@@ -19,6 +19,7 @@
 #include "groundslam/core/PoseGraph.hpp"
 #include "groundslam/core/RigidFit.hpp"
 #include "groundslam/core/StillFeatures.hpp"
+#include "groundslam/core/MountSmoother.hpp"
 #include "groundslam/core/Trajectory.hpp"
 #include "groundslam/pipeline/Config.hpp"
 #include "groundslam/pipeline/FramePreparer.hpp"
@@ -78,8 +79,18 @@ class Slam {
 
   /// The configuration it runs with (as validated by the constructor).
   const Config& config() const { return config_; }
-  /// The current estimate of every processed frame's pose.
+  /// The current estimate of every processed frame's pose (after finish(), corrected for the whole run's mount states).
   Trajectory trajectory() const;
+  /// The camera's roll, pitch and height of a frame (FrameResult::index), as finish() solved them over the whole
+  /// run; before finish(), or when outdoor.smooth_mount is off, the ones the frame was processed with.
+  MountState finalMount(int index) const;
+  /// After finish(): how the mount was found to rock and bounce over the run (the smoother's priors); nothing
+  /// when the mount was not solved over the run.
+  std::optional<MountRocking> mountRocking() const { return mount_rocking_; }
+  /// After finish(): the share of the mount estimates' own information the smoother believed (core/MountSmoother).
+  double mountTrust() const { return mount_trust_; }
+  /// After finish(): whether the mounts solved over the run were used (see outdoor.smooth_mount).
+  bool mountSmoothed() const { return !final_mounts_.empty(); }
   const PoseGraph& graph() const { return graph_; }
   /// Every loop-closure candidate verified so far, accepted or not (frames as in FrameResult::index); empty
   /// when an observer took them without keeping them.
@@ -138,6 +149,7 @@ class Slam {
   FitSettings odometry_fitting_;  ///< the odometry settings, rivals measured (see odometry_checks)
   FramePreparer preparer_;
   DescriptorMatcher matcher_;
+  CameraModel camera_;
   Eigen::Isometry3d calibrated_mount_;
   double ground_sample_m_ = 0.0;   ///< metres per pixel at the image centre
   ArtifactMask artifact_mask_;
@@ -153,6 +165,15 @@ class Slam {
   };
   Spread tilt_spread_, height_spread_;
   int mount_estimates_ = 0;
+  std::vector<FrameMountFactor> mount_factors_;  ///< every mount estimate's factor (graph frames)
+  std::vector<MountState> used_mounts_;        ///< per graph frame: the mount its points were projected with
+  std::vector<MountState> final_mounts_;       ///< per graph frame, from smoothMounts at finish()
+  std::optional<MountRocking> mount_rocking_;
+  double mount_trust_ = 1.0;
+
+  std::vector<Pose2> mount_corrections_;       ///< per graph frame: robot pose under final_mounts_ = graph pose * this
+  /// The whole run's mount states (core/MountSmoother) and each frame's pose correction for them.
+  void smoothMount();
   std::deque<Keyframe> recent_;  ///< tracked frames of the current segment, newest last (mount references)
   std::optional<LoopCloser> loop_closer_;
   PoseGraph graph_;

@@ -2,6 +2,8 @@
 // of Slam that estimates them and projects the frame's keypoints with them.
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 
 #include "groundslam/pipeline/Slam.hpp"
 #include "groundslam/pipeline/StageTimer.hpp"
@@ -59,8 +61,10 @@ void Slam::estimateMountOf(const Keyframe& previous, Keyframe& current, Odometry
   }
   references.push_back(std::move(from_previous));
   std::vector<MountObservation> observations;
+  std::vector<int> observed_frames = {current.index};
   for (const MountReference& reference : references) {
     if (!reference.keyframe->features.hasRays()) continue;
+    observed_frames.push_back(reference.keyframe->index);
     MountObservation o;
     o.reference = reference.keyframe->mount;
     o.T_guess = reference.T_reference_current;
@@ -78,6 +82,14 @@ void Slam::estimateMountOf(const Keyframe& previous, Keyframe& current, Odometry
   settings.max_pairs = config_.outdoor.max_pairs;
   const MountEstimate estimate = estimateMount(observations, calibrated_mount_, settings);
   if (!estimate.ok) return;
+  if (estimate.factor.information.size() > 0) {
+    FrameMountFactor factor{{current.index}, estimate.factor};
+    // The estimate's own variance understates its error (see variance_inflation): so does its factor's information.
+    factor.factor.information /= config_.outdoor.variance_inflation;
+    factor.factor.gradient /= config_.outdoor.variance_inflation;
+    for (int k : estimate.factor.observations) factor.frames.push_back(observed_frames[static_cast<size_t>(k) + 1]);
+    mount_factors_.push_back(std::move(factor));
+  }
   // Empirical Bayes: the estimate is shrunk toward the calibrated mount by the share of the estimates' spread
   // that is noise (hardly shrunk on a rocking mount with a clear view, all the way on a rigid one).
   const MountState& e = estimate.current;
@@ -91,9 +103,15 @@ void Slam::estimateMountOf(const Keyframe& previous, Keyframe& current, Odometry
   reprojected.mount = {keep_tilt * e.roll_rad, keep_tilt * e.pitch_rad,
                        calibrated_height + (1.0 - config_.outdoor.height_return) * keep_height * (e.height_m - calibrated_height)};
   reprojectToGround(reprojected.features, mountFor(calibrated_mount_, reprojected.mount));
-  // The same matches, now between points projected with each frame's own mount: the motion moves by a
-  // millimetre or two at most, so the fit before re-projection starts the refinement.
-  const RigidEstimate fit = refineMatches(odometry.used, previous, reprojected, odometry.T_prev_curr);
+  // The same matches, now between points projected with each frame's own mount. The re-projection moved the
+  // current points by up to a few millimetres (height x tilt), a shift the refinement must start from: the fit
+  // before re-projection, carried over by the transform that takes the new points onto the old ones.
+  std::vector<Eigen::Vector2d> before, after;
+  for (const Match& m : odometry.used) {
+    before.push_back(current.features.points[static_cast<size_t>(m.query)]);
+    after.push_back(reprojected.features.points[static_cast<size_t>(m.query)]);
+  }
+  const RigidEstimate fit = refineMatches(odometry.used, previous, reprojected, odometry.T_prev_curr * leastSquaresRigid(before, after));
   result.times.fit_ms += timer.lap();
   // A right mount brings the matched points closer together; one that does not is not used.
   if (!fit.ok() || fit.rms_residual_m >= odometry.rms_residual_m) return;
@@ -103,6 +121,53 @@ void Slam::estimateMountOf(const Keyframe& previous, Keyframe& current, Odometry
   odometry.inliers = fit.inliers;
   result.inliers = fit.inliers;
   result.mount_estimated = true;
+}
+
+void Slam::smoothMount() {
+  const int frames = static_cast<int>(used_mounts_.size());
+  mount_corrections_.clear();
+  final_mounts_.clear();
+  mount_rocking_.reset();
+  if (mount_factors_.empty()) return;
+  MountSmoothingSettings settings;
+  settings.nominal_height_m = calibrated_mount_.translation().z();
+  settings.max_tilt_sigma_rad = config_.outdoor.tilt_prior_deg * M_PI / 180.0;
+  settings.max_height_sigma_m = config_.outdoor.height_prior_m;
+  const MountSmoothing smoothing = smoothMounts(frames, mount_factors_, settings);
+  if (smoothing.states.size() != static_cast<size_t>(frames)) return;
+  mount_rocking_ = smoothing.rocking;
+  mount_trust_ = smoothing.trust;
+  // Estimates that only a tilt wandering as widely as outdoor.tilt_prior_deg (the bound on the mount's rocking)
+  // explains are not a rocking mount but images that misled every estimate alike (measured: a weak texture
+  // under the robot's shadow, glare and a bumper, where the smoothed tilt was worse than none): not used.
+  if (smoothing.rocking.tilt.sigma >= settings.max_tilt_sigma_rad * (1.0 - 1e-9)) return;
+  // The correction moves each pose so that the ground its image shows, projected with the final mount, lands
+  // where the graph put it with the mount the frame was processed with.
+  const CameraIntrinsics& k = camera_.intrinsics();
+  std::vector<Eigen::Vector2d> grid;
+  for (int row = 1; row <= 4; ++row) {
+    for (int col = 1; col <= 4; ++col) grid.emplace_back(k.width * col / 5.0, k.height * row / 5.0);
+  }
+  const std::vector<Eigen::Vector2d> rays = camera_.normalisedRays(grid);
+  final_mounts_ = used_mounts_;  // a prior map's keyframes keep theirs
+  mount_corrections_.assign(static_cast<size_t>(frames), Pose2());
+  for (size_t i = static_cast<size_t>(prior_frames_); i < static_cast<size_t>(frames); ++i) {
+    final_mounts_[i] = smoothing.states[i];
+    const Eigen::Isometry3d used = mountFor(calibrated_mount_, used_mounts_[i]), smoothed = mountFor(calibrated_mount_, final_mounts_[i]);
+    std::vector<Eigen::Vector2d> from_used, from_smoothed;
+    for (const Eigen::Vector2d& ray : rays) {
+      const auto a = CameraModel::intersectGround(ray, used), b = CameraModel::intersectGround(ray, smoothed);
+      if (a && b) from_used.push_back(*a), from_smoothed.push_back(*b);
+    }
+    mount_corrections_[i] = leastSquaresRigid(from_used, from_smoothed);
+  }
+}
+
+
+MountState Slam::finalMount(int index) const {
+  const size_t i = static_cast<size_t>(index + prior_frames_);
+  if (index < 0 || i >= used_mounts_.size()) return calibratedState(calibrated_mount_);
+  return i < final_mounts_.size() ? final_mounts_[i] : used_mounts_[i];
 }
 
 }  // namespace groundslam

@@ -1,0 +1,194 @@
+#include "groundslam/core/MountSmoother.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <optional>
+
+#include <Eigen/Eigenvalues>
+#include <Eigen/SparseCholesky>
+#include <Eigen/SparseCore>
+
+namespace groundslam {
+namespace {
+
+constexpr int kState = 3;  // roll, pitch, height
+constexpr double kCorrelations[] = {0.0, 0.5, 0.8, 0.9, 0.95, 0.98};
+constexpr double kTrusts[] = {1.0, 0.5, 0.25, 0.125, 0.0625};
+
+bool usable(const FrameMountFactor& f) {
+  const auto size = static_cast<Eigen::Index>(kState * f.frames.size());
+  const MountFactor& t = f.factor;
+  return !f.frames.empty() && t.information.rows() == size && t.information.cols() == size && t.gradient.size() == size &&
+         t.linearisation.size() == size && t.information.allFinite() && t.gradient.allFinite() && t.linearisation.allFinite();
+}
+
+/// The factors over frames first .. first+count-1 in departures d from the nominal state: their summed cost is
+/// 1/2 d^T H d - eta^T d + offset, and `rank` and `minimum` are the summed ranks and own minima of the factors
+/// (what the cost of factors that agreed perfectly with each other would be).
+struct NormalEquations {
+  int first = 0, count = 0;
+  std::vector<Eigen::Triplet<double>> entries;
+  Eigen::VectorXd eta;
+  double offset = 0.0, minimum = 0.0;
+  int rank = 0;
+};
+
+NormalEquations normalEquations(int first, int count, const std::vector<FrameMountFactor>& factors, const Eigen::Vector3d& nominal) {
+  NormalEquations system;
+  system.first = first;
+  system.count = count;
+  system.eta = Eigen::VectorXd::Zero(kState * static_cast<Eigen::Index>(count));
+  for (const FrameMountFactor& f : factors) {
+    if (!usable(f)) continue;
+    bool inside = true;
+    for (int frame : f.frames) inside = inside && frame >= first && frame < first + count;
+    if (!inside) continue;
+    const auto size = static_cast<Eigen::Index>(kState * f.frames.size());
+    const Eigen::MatrixXd& H = f.factor.information;
+    const Eigen::VectorXd& g = f.factor.gradient;
+    // 1/2 e^T H e + g^T e with e = d - d0 (d0: the linearisation's departure) = 1/2 d^T H d - (H d0 - g)^T d + const.
+    Eigen::VectorXd d0 = f.factor.linearisation;
+    for (Eigen::Index a = 0; a < size; ++a) d0[a] -= nominal[a % kState];
+    const Eigen::VectorXd b = H * d0 - g;
+    system.offset += 0.5 * d0.dot(H * d0) - g.dot(d0);
+    for (Eigen::Index a = 0; a < size; ++a) {
+      const Eigen::Index row = kState * (f.frames[static_cast<size_t>(a / kState)] - first) + a % kState;
+      system.eta[row] += b[a];
+      for (Eigen::Index c = 0; c < size; ++c) {
+        const Eigen::Index column = kState * (f.frames[static_cast<size_t>(c / kState)] - first) + c % kState;
+        system.entries.emplace_back(row, column, H(a, c));
+      }
+    }
+    // The factor's own minimum over the directions it informs.
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(H);
+    if (eigen.info() != Eigen::Success) continue;
+    const Eigen::VectorXd lambda = eigen.eigenvalues();
+    const Eigen::VectorXd gu = eigen.eigenvectors().transpose() * g;
+    const double floor = 1e-9 * std::max(1e-300, lambda.cwiseAbs().maxCoeff());
+    for (Eigen::Index a = 0; a < size; ++a) {
+      if (lambda[a] <= floor) continue;
+      system.minimum -= 0.5 * gu[a] * gu[a] / lambda[a];
+      ++system.rank;
+    }
+  }
+  return system;
+}
+
+/// The priors, and how far the factors' information is trusted (the estimates' own covariance understates
+/// their error where the images are hard: few matches, a glare, artifacts; on such runs the factors disagree
+/// more than it says).
+struct Hypothesis {
+  Rocking tilt, height;
+  double trust = 1.0;
+};
+
+struct Solution {
+  Eigen::VectorXd departures;
+  double evidence = -std::numeric_limits<double>::infinity();
+};
+
+/// The posterior mean under a hypothesis and log p(factors | hypothesis) up to a constant.
+std::optional<Solution> solve(const NormalEquations& system, const Hypothesis& h) {
+  const int n = system.count;
+  std::vector<Eigen::Triplet<double>> entries;
+  entries.reserve(system.entries.size() + static_cast<size_t>(3 * kState * n));
+  for (const auto& e : system.entries) entries.emplace_back(e.row(), e.col(), h.trust * e.value());
+  double prior_log_det = 0.0;
+  for (int component = 0; component < kState; ++component) {
+    const Rocking& r = component < 2 ? h.tilt : h.height;
+    const double rho = n > 1 ? r.correlation : 0.0;
+    // The AR(1) precision: tridiagonal, (1 / (sigma^2 (1 - rho^2))) times 1, 1 + rho^2, ..., 1 + rho^2, 1 on the
+    // diagonal and -rho beside it; its log determinant -n log sigma^2 - (n - 1) log(1 - rho^2).
+    const double c = 1.0 / (r.sigma * r.sigma * (1.0 - rho * rho));
+    for (int i = 0; i < n; ++i) {
+      const Eigen::Index row = kState * i + component;
+      const bool inner = i > 0 && i < n - 1;
+      entries.emplace_back(row, row, n == 1 ? 1.0 / (r.sigma * r.sigma) : c * (inner ? 1.0 + rho * rho : 1.0));
+      if (i > 0 && rho != 0.0) {
+        entries.emplace_back(row, row - kState, -rho * c);
+        entries.emplace_back(row - kState, row, -rho * c);
+      }
+    }
+    prior_log_det += -n * std::log(r.sigma * r.sigma) - (n - 1) * std::log(1.0 - rho * rho);
+  }
+  const Eigen::Index size = kState * static_cast<Eigen::Index>(n);
+  Eigen::SparseMatrix<double> A(size, size);
+  A.setFromTriplets(entries.begin(), entries.end());
+  const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(A);
+  if (solver.info() != Eigen::Success) return std::nullopt;
+  const Eigen::VectorXd rhs = h.trust * system.eta;
+  Solution solution;
+  solution.departures = solver.solve(rhs);
+  if (solver.info() != Eigen::Success || !solution.departures.allFinite()) return std::nullopt;
+  const Eigen::VectorXd d = solver.vectorD();
+  if ((d.array() <= 0.0).any()) return std::nullopt;
+  // The factors as likelihoods scaled by `trust`: each contributes (trust)^(rank/2) exp(-trust (cost - its minimum)).
+  solution.evidence = 0.5 * rhs.dot(solution.departures) - 0.5 * d.array().log().sum() + 0.5 * prior_log_det -
+                      h.trust * (system.offset - system.minimum) + 0.5 * system.rank * std::log(h.trust);
+  if (!std::isfinite(solution.evidence)) return std::nullopt;
+  return solution;
+}
+
+enum class Part { tilt, height, trust };
+
+/// The best value of one part of the hypothesis (the others held) by the evidence.
+void choose(const NormalEquations& system, Hypothesis& h, Part part, const MountSmoothingSettings& settings) {
+  double best = -std::numeric_limits<double>::infinity();
+  Hypothesis chosen = h;
+  const auto consider = [&](const Hypothesis& candidate) {
+    const auto solution = solve(system, candidate);
+    if (solution && solution->evidence > best) best = solution->evidence, chosen = candidate;
+  };
+  if (part == Part::trust) {
+    for (double trust : kTrusts) {
+      Hypothesis candidate = h;
+      candidate.trust = trust;
+      consider(candidate);
+    }
+  } else {
+    const double max_sigma = part == Part::tilt ? settings.max_tilt_sigma_rad : settings.max_height_sigma_m;
+    for (double rho : kCorrelations) {
+      for (int k = 0; k < 8; ++k) {
+        Hypothesis candidate = h;
+        (part == Part::tilt ? candidate.tilt : candidate.height) = {max_sigma / std::pow(2.0, k), rho};
+        consider(candidate);
+      }
+    }
+  }
+  h = chosen;
+}
+
+}  // namespace
+
+MountSmoothing smoothMounts(int frames, const std::vector<FrameMountFactor>& factors, const MountSmoothingSettings& settings) {
+  MountSmoothing result;
+  if (frames <= 0 || !(settings.max_tilt_sigma_rad > 0.0) || !(settings.max_height_sigma_m > 0.0) ||
+      !std::isfinite(settings.max_tilt_sigma_rad) || !std::isfinite(settings.max_height_sigma_m)) {
+    return result;
+  }
+  const Eigen::Vector3d nominal(0.0, 0.0, settings.nominal_height_m);
+  // The hypothesis is chosen on a window from the first frame with a factor (a bounded cost however long the
+  // run), one part at a time: the tilt's prior, the height's, the trust, then the two priors again.
+  int first = frames;
+  for (const FrameMountFactor& f : factors) {
+    if (usable(f)) first = std::min(first, *std::min_element(f.frames.begin(), f.frames.end()));
+  }
+  first = std::clamp(first, 0, frames - 1);
+  const int window = std::min(frames - first, std::max(1, settings.search_frames));
+  const NormalEquations search = normalEquations(first, window, factors, nominal);
+  Hypothesis h{{settings.max_tilt_sigma_rad / 8.0, 0.8}, {settings.max_height_sigma_m / 8.0, 0.8}, 1.0};
+  for (Part part : {Part::tilt, Part::height, Part::trust, Part::tilt, Part::height}) choose(search, h, part, settings);
+  result.rocking = {h.tilt, h.height};
+  result.trust = h.trust;
+  const auto solution = solve(normalEquations(0, frames, factors, nominal), h);
+  if (!solution) return result;
+  result.states.resize(static_cast<size_t>(frames));
+  for (int i = 0; i < frames; ++i) {
+    const Eigen::Vector3d state = solution->departures.segment<kState>(kState * i) + nominal;
+    result.states[static_cast<size_t>(i)] = {state.x(), state.y(), state.z()};
+  }
+  return result;
+}
+
+}  // namespace groundslam

@@ -1,0 +1,55 @@
+#pragma once
+// Not in the paper: the camera's roll, pitch and height over the whole run at once. One frame's estimate
+// (core/MountEstimation) knows its state relative to its references far better than absolutely: two views of
+// the ground show the rotation and the change of scale between them clearly, the plane's orientation only
+// through a baseline of a centimetre or so, and the heights' common scale not at all. Solving every frame's
+// state together from all the estimates' factors, under a prior that the mount rocks and bounces around its
+// calibration, keeps the relative precision and pins the level with the whole run.
+
+#include <vector>
+
+#include "groundslam/core/MountEstimation.hpp"
+
+namespace groundslam {
+
+/// A MountFactor tied to frames: frames[0] is its current frame, then its references.
+struct FrameMountFactor {
+  std::vector<int> frames;
+  MountFactor factor;
+};
+
+/// A stationary AR(1) process around the calibrated mount: standard deviation `sigma`, each frame keeping
+/// `correlation` of the previous frame's departure.
+struct Rocking {
+  double sigma = 0.0;
+  double correlation = 0.0;
+};
+
+struct MountSmoothingSettings {
+  double nominal_height_m = 0.25;     ///< the calibrated height (the tilt's nominal value is zero)
+  double max_tilt_sigma_rad = 0.035;  ///< the widest tilt prior tried (then halved, 8 values)
+  double max_height_sigma_m = 0.003;  ///< the widest height prior tried (then halved, 8 values)
+  int search_frames = 600;            ///< the priors are chosen on this many frames (the first with factors)
+};
+
+/// How a mount moves around its calibration: its tilt (radians, roll and pitch alike) and its height (metres).
+struct MountRocking {
+  Rocking tilt;
+  Rocking height;
+};
+
+struct MountSmoothing {
+  std::vector<MountState> states;  ///< per frame; empty when nothing could be solved
+  MountRocking rocking;            ///< the priors chosen: how the mount rocks and bounces, as the factors tell
+  double trust = 1.0;              ///< the share of the factors' information believed (1, 1/2, ... 1/16)
+};
+
+/// Every frame's state, frames 0 .. frames-1 in the order they were taken, minimising the factors' costs (a
+/// factor naming another frame is ignored) under AR(1) priors on the tilt (roll and pitch alike) and on the
+/// height. Each prior's sigma and correlation (0 to 0.98), and how far the factors' information is trusted, are
+/// chosen by the factors' marginal likelihood: a rigid mount gets small priors, so its frames stay at the
+/// calibration instead of following the estimates' noise, and factors that disagree more than their information
+/// says are trusted less.
+MountSmoothing smoothMounts(int frames, const std::vector<FrameMountFactor>& factors, const MountSmoothingSettings& settings);
+
+}  // namespace groundslam
