@@ -13,6 +13,7 @@
 #include "groundslam/core/Matching.hpp"
 #include "groundslam/core/NearestDescriptors.hpp"
 #include "groundslam/core/MountEstimation.hpp"
+#include "groundslam/core/MountSmoother.hpp"
 #include "groundslam/core/StillFeatures.hpp"
 #include "groundslam/core/PoseGraph.hpp"
 #include "groundslam/core/RigidFit.hpp"
@@ -266,6 +267,30 @@ void BM_MountEstimation(benchmark::State& state) {
   state.counters["pairs"] = static_cast<double>(std::min<size_t>(reference.size(), 300));
 }
 BENCHMARK(BM_MountEstimation)->Unit(benchmark::kMillisecond);
+
+void BM_MountSmoothing(benchmark::State& state) {
+  // What finish() adds once per run: every frame's factor (its state, the previous frame's and the fifth one
+  // back, as the pipeline's references), the priors chosen on up to 600 frames, then one solve over all of them.
+  const int frames = static_cast<int>(state.range(0));
+  std::mt19937 rng(5);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  std::vector<FrameMountFactor> factors;
+  for (int i = 5; i < frames; ++i) {
+    Eigen::MatrixXd B(9, 9);
+    for (Eigen::Index r = 0; r < 9; ++r) {
+      for (Eigen::Index c = 0; c < 9; ++c) B(r, c) = normal(rng);
+    }
+    FrameMountFactor f{{i, i - 1, i - 5}, {}};
+    f.factor.information = 1e5 * B * B.transpose();
+    f.factor.gradient = Eigen::VectorXd::Zero(9);
+    f.factor.linearisation = Eigen::VectorXd::Zero(9);
+    for (Eigen::Index a = 0; a < 9; ++a) f.factor.linearisation[a] = a % 3 == 2 ? 0.25 + 0.001 * normal(rng) : 0.005 * normal(rng);
+    factors.push_back(std::move(f));
+  }
+  MountSmoothingSettings settings;
+  for (auto _ : state) benchmark::DoNotOptimize(smoothMounts(frames, factors, settings));
+}
+BENCHMARK(BM_MountSmoothing)->Arg(400)->Arg(5000)->Unit(benchmark::kMillisecond);
 
 const Vocabulary& vocabulary() {
   static const Vocabulary instance = readVocabulary(GROUNDSLAM_DEFAULT_VOCABULARY);

@@ -2,8 +2,6 @@
 // of Slam that estimates them and projects the frame's keypoints with them.
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
-#include <cstdlib>
 
 #include "groundslam/pipeline/Slam.hpp"
 #include "groundslam/pipeline/StageTimer.hpp"
