@@ -5,7 +5,6 @@
 #include <limits>
 #include <optional>
 
-#include <Eigen/Eigenvalues>
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseCore>
 
@@ -14,7 +13,6 @@ namespace {
 
 constexpr int kState = 3;  // roll, pitch, height
 constexpr double kCorrelations[] = {0.0, 0.5, 0.8, 0.9, 0.95, 0.98};
-constexpr double kTrusts[] = {1.0, 0.5, 0.25, 0.125, 0.0625};
 
 bool usable(const FrameMountFactor& f) {
   const auto size = static_cast<Eigen::Index>(kState * f.frames.size());
@@ -24,14 +22,11 @@ bool usable(const FrameMountFactor& f) {
 }
 
 /// The factors over frames first .. first+count-1 in departures d from the nominal state: their summed cost is
-/// 1/2 d^T H d - eta^T d + offset, and `rank` and `minimum` are the summed ranks and own minima of the factors
-/// (what the cost of factors that agreed perfectly with each other would be).
+/// 1/2 d^T H d - eta^T d + const.
 struct NormalEquations {
   int first = 0, count = 0;
   std::vector<Eigen::Triplet<double>> entries;
   Eigen::VectorXd eta;
-  double offset = 0.0, minimum = 0.0;
-  int rank = 0;
 };
 
 NormalEquations normalEquations(int first, int count, const std::vector<FrameMountFactor>& factors, const Eigen::Vector3d& nominal) {
@@ -51,7 +46,6 @@ NormalEquations normalEquations(int first, int count, const std::vector<FrameMou
     Eigen::VectorXd d0 = f.factor.linearisation;
     for (Eigen::Index a = 0; a < size; ++a) d0[a] -= nominal[a % kState];
     const Eigen::VectorXd b = H * d0 - g;
-    system.offset += 0.5 * d0.dot(H * d0) - g.dot(d0);
     for (Eigen::Index a = 0; a < size; ++a) {
       const Eigen::Index row = kState * (f.frames[static_cast<size_t>(a / kState)] - first) + a % kState;
       system.eta[row] += b[a];
@@ -60,27 +54,13 @@ NormalEquations normalEquations(int first, int count, const std::vector<FrameMou
         system.entries.emplace_back(row, column, H(a, c));
       }
     }
-    // The factor's own minimum over the directions it informs.
-    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(H);
-    if (eigen.info() != Eigen::Success) continue;
-    const Eigen::VectorXd lambda = eigen.eigenvalues();
-    const Eigen::VectorXd gu = eigen.eigenvectors().transpose() * g;
-    const double floor = 1e-9 * std::max(1e-300, lambda.cwiseAbs().maxCoeff());
-    for (Eigen::Index a = 0; a < size; ++a) {
-      if (lambda[a] <= floor) continue;
-      system.minimum -= 0.5 * gu[a] * gu[a] / lambda[a];
-      ++system.rank;
-    }
   }
   return system;
 }
 
-/// The priors, and how far the factors' information is trusted (the estimates' own covariance understates
-/// their error where the images are hard: few matches, a glare, artifacts; on such runs the factors disagree
-/// more than it says).
+/// The priors on the tilt and on the height.
 struct Hypothesis {
   Rocking tilt, height;
-  double trust = 1.0;
 };
 
 struct Solution {
@@ -93,7 +73,7 @@ std::optional<Solution> solve(const NormalEquations& system, const Hypothesis& h
   const int n = system.count;
   std::vector<Eigen::Triplet<double>> entries;
   entries.reserve(system.entries.size() + static_cast<size_t>(3 * kState * n));
-  for (const auto& e : system.entries) entries.emplace_back(e.row(), e.col(), h.trust * e.value());
+  entries.insert(entries.end(), system.entries.begin(), system.entries.end());
   double prior_log_det = 0.0;
   for (int component = 0; component < kState; ++component) {
     const Rocking& r = component < 2 ? h.tilt : h.height;
@@ -117,20 +97,17 @@ std::optional<Solution> solve(const NormalEquations& system, const Hypothesis& h
   A.setFromTriplets(entries.begin(), entries.end());
   const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(A);
   if (solver.info() != Eigen::Success) return std::nullopt;
-  const Eigen::VectorXd rhs = h.trust * system.eta;
   Solution solution;
-  solution.departures = solver.solve(rhs);
+  solution.departures = solver.solve(system.eta);
   if (solver.info() != Eigen::Success || !solution.departures.allFinite()) return std::nullopt;
   const Eigen::VectorXd d = solver.vectorD();
   if ((d.array() <= 0.0).any()) return std::nullopt;
-  // The factors as likelihoods scaled by `trust`: each contributes (trust)^(rank/2) exp(-trust (cost - its minimum)).
-  solution.evidence = 0.5 * rhs.dot(solution.departures) - 0.5 * d.array().log().sum() + 0.5 * prior_log_det -
-                      h.trust * (system.offset - system.minimum) + 0.5 * system.rank * std::log(h.trust);
+  solution.evidence = 0.5 * system.eta.dot(solution.departures) - 0.5 * d.array().log().sum() + 0.5 * prior_log_det;
   if (!std::isfinite(solution.evidence)) return std::nullopt;
   return solution;
 }
 
-enum class Part { tilt, height, trust };
+enum class Part { tilt, height };
 
 /// The best value of one part of the hypothesis (the others held) by the evidence.
 void choose(const NormalEquations& system, Hypothesis& h, Part part, const MountSmoothingSettings& settings) {
@@ -140,20 +117,12 @@ void choose(const NormalEquations& system, Hypothesis& h, Part part, const Mount
     const auto solution = solve(system, candidate);
     if (solution && solution->evidence > best) best = solution->evidence, chosen = candidate;
   };
-  if (part == Part::trust) {
-    for (double trust : kTrusts) {
+  const double max_sigma = part == Part::tilt ? settings.max_tilt_sigma_rad : settings.max_height_sigma_m;
+  for (double rho : kCorrelations) {
+    for (int k = 0; k < 8; ++k) {
       Hypothesis candidate = h;
-      candidate.trust = trust;
+      (part == Part::tilt ? candidate.tilt : candidate.height) = {max_sigma / std::pow(2.0, k), rho};
       consider(candidate);
-    }
-  } else {
-    const double max_sigma = part == Part::tilt ? settings.max_tilt_sigma_rad : settings.max_height_sigma_m;
-    for (double rho : kCorrelations) {
-      for (int k = 0; k < 8; ++k) {
-        Hypothesis candidate = h;
-        (part == Part::tilt ? candidate.tilt : candidate.height) = {max_sigma / std::pow(2.0, k), rho};
-        consider(candidate);
-      }
     }
   }
   h = chosen;
@@ -169,7 +138,7 @@ MountSmoothing smoothMounts(int frames, const std::vector<FrameMountFactor>& fac
   }
   const Eigen::Vector3d nominal(0.0, 0.0, settings.nominal_height_m);
   // The hypothesis is chosen on a window from the first frame with a factor (a bounded cost however long the
-  // run), one part at a time: the tilt's prior, the height's, the trust, then the two priors again.
+  // run), one part at a time: the tilt's prior, the height's, then both again.
   int first = frames;
   for (const FrameMountFactor& f : factors) {
     if (usable(f)) first = std::min(first, *std::min_element(f.frames.begin(), f.frames.end()));
@@ -177,10 +146,9 @@ MountSmoothing smoothMounts(int frames, const std::vector<FrameMountFactor>& fac
   first = std::clamp(first, 0, frames - 1);
   const int window = std::min(frames - first, std::max(1, settings.search_frames));
   const NormalEquations search = normalEquations(first, window, factors, nominal);
-  Hypothesis h{{settings.max_tilt_sigma_rad / 8.0, 0.8}, {settings.max_height_sigma_m / 8.0, 0.8}, 1.0};
-  for (Part part : {Part::tilt, Part::height, Part::trust, Part::tilt, Part::height}) choose(search, h, part, settings);
+  Hypothesis h{{settings.max_tilt_sigma_rad / 8.0, 0.8}, {settings.max_height_sigma_m / 8.0, 0.8}};
+  for (Part part : {Part::tilt, Part::height, Part::tilt, Part::height}) choose(search, h, part, settings);
   result.rocking = {h.tilt, h.height};
-  result.trust = h.trust;
   const auto solution = solve(normalEquations(0, frames, factors, nominal), h);
   if (!solution) return result;
   result.states.resize(static_cast<size_t>(frames));

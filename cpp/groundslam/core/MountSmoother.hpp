@@ -41,15 +41,12 @@ struct MountRocking {
 struct MountSmoothing {
   std::vector<MountState> states;  ///< per frame; empty when nothing could be solved
   MountRocking rocking;            ///< the priors chosen: how the mount rocks and bounces, as the factors tell
-  double trust = 1.0;              ///< the share of the factors' information believed (1, 1/2, ... 1/16)
 };
 
 /// Every frame's state, frames 0 .. frames-1 in the order they were taken, minimising the factors' costs (a
 /// factor naming another frame is ignored) under AR(1) priors on the tilt (roll and pitch alike) and on the
-/// height. Each prior's sigma and correlation (0 to 0.98), and how far the factors' information is trusted, are
-/// chosen by the factors' marginal likelihood: a rigid mount gets small priors, so its frames stay at the
-/// calibration instead of following the estimates' noise, and factors that disagree more than their information
-/// says are trusted less.
+/// height. Each prior's sigma and correlation (0 to 0.98) are chosen by the factors' marginal likelihood: a
+/// rigid mount gets small priors, so its frames stay at the calibration instead of following the estimates' noise.
 MountSmoothing smoothMounts(int frames, const std::vector<FrameMountFactor>& factors, const MountSmoothingSettings& settings);
 
 }  // namespace groundslam

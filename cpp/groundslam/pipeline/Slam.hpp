@@ -87,8 +87,6 @@ class Slam {
   /// After finish(): how the mount was found to rock and bounce over the run (the smoother's priors); nothing
   /// when the mount was not solved over the run.
   std::optional<MountRocking> mountRocking() const { return mount_rocking_; }
-  /// After finish(): the share of the mount estimates' own information the smoother believed (core/MountSmoother).
-  double mountTrust() const { return mount_trust_; }
   /// After finish(): whether the mounts solved over the run were used (see outdoor.smooth_mount).
   bool mountSmoothed() const { return !final_mounts_.empty(); }
   const PoseGraph& graph() const { return graph_; }
@@ -169,7 +167,6 @@ class Slam {
   std::vector<MountState> used_mounts_;        ///< per graph frame: the mount its points were projected with
   std::vector<MountState> final_mounts_;       ///< per graph frame, from smoothMounts at finish()
   std::optional<MountRocking> mount_rocking_;
-  double mount_trust_ = 1.0;
 
   std::vector<Pose2> mount_corrections_;       ///< per graph frame: robot pose under final_mounts_ = graph pose * this
   /// The whole run's mount states (core/MountSmoother) and each frame's pose correction for them.

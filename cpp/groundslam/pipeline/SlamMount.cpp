@@ -134,7 +134,6 @@ void Slam::smoothMount() {
   const MountSmoothing smoothing = smoothMounts(frames, mount_factors_, settings);
   if (smoothing.states.size() != static_cast<size_t>(frames)) return;
   mount_rocking_ = smoothing.rocking;
-  mount_trust_ = smoothing.trust;
   // Estimates that only a tilt wandering as widely as outdoor.tilt_prior_deg (the bound on the mount's rocking)
   // explains are not a rocking mount but images that misled every estimate alike (measured: a weak texture
   // under the robot's shadow, glare and a bumper, where the smoothed tilt was worse than none): not used.
