@@ -121,7 +121,14 @@ void choose(const NormalEquations& system, Hypothesis& h, Part part, const Mount
   for (double rho : kCorrelations) {
     for (int k = 0; k < 8; ++k) {
       Hypothesis candidate = h;
-      (part == Part::tilt ? candidate.tilt : candidate.height) = {max_sigma / std::pow(2.0, k), rho};
+      // Assigned by a plain if: GCC 12 with the sanitizers miscompiled `(cond ? a : b) = {...}` here (every
+      // candidate got the last sigma).
+      const Rocking rocking{max_sigma / std::pow(2.0, k), rho};
+      if (part == Part::tilt) {
+        candidate.tilt = rocking;
+      } else {
+        candidate.height = rocking;
+      }
       consider(candidate);
     }
   }
