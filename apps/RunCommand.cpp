@@ -80,7 +80,7 @@ RunProgress runInto(const std::string& folder, const RunOptions& o, const Datase
   writeNewFile(file("config.yaml"), configToYaml(settings));
   std::vector<double> load_ms;
   std::vector<FrameResult> results = processAll(dataset, config, slam, load_ms);
-  for (FrameResult& r : results) r.mount = slam.finalMount(r.index);  // the whole run's tilt estimate
+  for (FrameResult& r : results) r.mount = slam.finalMount(r.index);  // as solved over the whole run
   // A video's or camera's length is what was read (an interrupted stream is still a complete run of it).
   const size_t total = dataset.isVideo() ? results.size() : dataset.frames.size();
   const RunProgress progress{results.size(), total};

@@ -41,7 +41,7 @@ Slam::Slam(const Config& config, std::shared_ptr<const Vocabulary> vocabulary)
       matcher_(config.matching),
       camera_(cameraModelFrom(config.camera)),
       calibrated_mount_(camera_.T_robot_camera()),
-      ground_sample_m_(cameraModelFrom(config.camera).groundSampleDistance()),
+      ground_sample_m_(camera_.groundSampleDistance()),
       artifact_mask_(intrinsicsOf(config.camera), config.outdoor.mask),
       graph_(config.graph.solver) {
   odometry_fitting_.measure_ambiguity = true;
