@@ -156,7 +156,8 @@ MountSmoothing smoothMounts(int frames, const std::vector<FrameMountFactor>& fac
   Hypothesis h{{settings.max_tilt_sigma_rad / 8.0, 0.8}, {settings.max_height_sigma_m / 8.0, 0.8}};
   for (Part part : {Part::tilt, Part::height, Part::tilt, Part::height}) choose(search, h, part, settings);
   result.rocking = {h.tilt, h.height};
-  const auto solution = solve(normalEquations(0, frames, factors, nominal), h);
+  // The whole run (the search's own system when the window already covers it).
+  const auto solution = first == 0 && window == frames ? solve(search, h) : solve(normalEquations(0, frames, factors, nominal), h);
   if (!solution) return result;
   result.states.resize(static_cast<size_t>(frames));
   for (int i = 0; i < frames; ++i) {

@@ -160,7 +160,6 @@ void Slam::smoothMount() {
   }
 }
 
-
 MountState Slam::finalMount(int index) const {
   const size_t i = static_cast<size_t>(index + prior_frames_);
   if (index < 0 || i >= used_mounts_.size()) return calibratedState(calibrated_mount_);
