@@ -80,7 +80,10 @@ RunProgress runInto(const std::string& folder, const RunOptions& o, const Datase
   writeNewFile(file("config.yaml"), configToYaml(settings));
   std::vector<double> load_ms;
   std::vector<FrameResult> results = processAll(dataset, config, slam, load_ms);
-  for (FrameResult& r : results) r.mount = slam.finalMount(r.index);  // as solved over the whole run
+  for (FrameResult& r : results) {  // as solved over the whole run
+    r.mount = slam.finalMount(r.index);
+    r.odometry = slam.finalOdometry(r.index, r.odometry);
+  }
   // A video's or camera's length is what was read (an interrupted stream is still a complete run of it).
   const size_t total = dataset.isVideo() ? results.size() : dataset.frames.size();
   const RunProgress progress{results.size(), total};

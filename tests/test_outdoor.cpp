@@ -402,6 +402,9 @@ namespace {
 struct OutdoorRun {
   int ok_frames = 0;
   int wrong_ok = 0;        ///< frames reported ok whose motion is off by more than 5 mm or 0.5 degrees
+  int wrong_ok_final = 0;  ///< the same, with the motions as the mounts solved over the run make them
+  double motion_error_m = 0.0;        ///< RMS translation error of the ok frames' motions, as processed
+  double final_motion_error_m = 0.0;  ///< the same after finish() (Slam::finalOdometry)
   double ate_m = 0.0;
   double tilt_error_rad = 0.0;  ///< RMS over frames with an estimate
   double tilt_rad = 0.0;        ///< RMS of the true tilt over the same frames
@@ -441,22 +444,35 @@ OutdoorRun runOdometry(const sim::SimulationSettings& s, double drop_probability
   double tilt_error2 = 0.0, tilt2 = 0.0;
   int estimated = 0;
   std::vector<std::pair<int, int>> estimated_frames;  // (result index, image index)
+  struct OkMotion {
+    int index;
+    Pose2 odometry, expected;
+  };
+  std::vector<OkMotion> ok_motions;
   for (int i = 0; i < simulator.frameCount(); ++i) {
     if (dropped[static_cast<size_t>(i)]) continue;
     const FrameResult r = slam.process(simulator.renderFrame(i), i);
     truth.push_back({double(i), simulator.groundTruth()[size_t(i)]});
     if (previous && r.status == FrameStatus::ok) {
       ++run.ok_frames;
-      const Pose2 expected = between(simulator.groundTruth()[size_t(*previous)], simulator.groundTruth()[size_t(i)]);
-      if ((r.odometry.translation() - expected.translation()).norm() > 0.005 ||
-          std::abs(wrapAngle(r.odometry.theta - expected.theta)) > 0.5 * kDeg) {
-        ++run.wrong_ok;
-      }
+      ok_motions.push_back({r.index, r.odometry, between(simulator.groundTruth()[size_t(*previous)], simulator.groundTruth()[size_t(i)])});
     }
     if (r.mount_estimated) estimated_frames.push_back({r.index, i});
     previous = i;
   }
   slam.finish();
+  const auto wrong = [](const Pose2& motion, const Pose2& expected) {
+    return (motion.translation() - expected.translation()).norm() > 0.005 || std::abs(wrapAngle(motion.theta - expected.theta)) > 0.5 * kDeg;
+  };
+  for (const OkMotion& m : ok_motions) {
+    const Pose2 final_motion = slam.finalOdometry(m.index, m.odometry);
+    run.wrong_ok += wrong(m.odometry, m.expected) ? 1 : 0;
+    run.wrong_ok_final += wrong(final_motion, m.expected) ? 1 : 0;
+    run.motion_error_m += (m.odometry.translation() - m.expected.translation()).squaredNorm();
+    run.final_motion_error_m += (final_motion.translation() - m.expected.translation()).squaredNorm();
+  }
+  run.motion_error_m = std::sqrt(run.motion_error_m / static_cast<double>(std::max<size_t>(1, ok_motions.size())));
+  run.final_motion_error_m = std::sqrt(run.final_motion_error_m / static_cast<double>(std::max<size_t>(1, ok_motions.size())));
   // The tilt as the run ends with it: smoothed over the whole run, or each frame's own estimate.
   for (const auto& [index, image] : estimated_frames) {
     const MountState mount = slam.finalMount(index);
@@ -493,6 +509,9 @@ TEST(OutdoorSequence, MountSolvedOverTheWholeRunHalvesTheRockingError) {
   EXPECT_LT(smoothed.tilt_error_rad, 0.5 * per_frame.tilt_error_rad);
   EXPECT_LT(smoothed.tilt_error_rad, 0.5 * smoothed.tilt_rad);
   EXPECT_EQ(smoothed.wrong_ok, per_frame.wrong_ok);  // the frames' own motions are what they were
+  // The motions of frames.csv, re-projected with the solved mounts: 1.29 -> 0.83 mm RMS.
+  EXPECT_LT(smoothed.final_motion_error_m, 0.75 * smoothed.motion_error_m);
+  EXPECT_EQ(per_frame.final_motion_error_m, per_frame.motion_error_m);  // nothing solved, nothing changed
 }
 
 TEST(OutdoorSequence, TrackedThroughArtifactsSharpTurnsAndDroppedFrames) {
@@ -503,6 +522,16 @@ TEST(OutdoorSequence, TrackedThroughArtifactsSharpTurnsAndDroppedFrames) {
   EXPECT_GE(run.ok_frames, 120);
   EXPECT_LE(run.wrong_ok, 2);
   EXPECT_LT(run.ate_m, 0.006);
+}
+
+TEST(OutdoorSequence, TheSolvedMountCorrectsTheMotionAtAQuarterTurn) {
+  // At a turn on the spot, a tilt error moves the footprint's centre and so the motion: with each frame's own
+  // mount one quarter turn is 5.5 mm off. Re-projected with the mounts solved over the run (what frames.csv
+  // reports), measured: none off, and the ok motions' RMS error 1.99 -> 1.51 mm.
+  const OutdoorRun run = runOdometry(rockingSequence(true), 0.03, true, true);
+  EXPECT_GE(run.wrong_ok, 1);
+  EXPECT_EQ(run.wrong_ok_final, 0);
+  EXPECT_LT(run.final_motion_error_m, 0.85 * run.motion_error_m);
 }
 
 TEST(IlluminationFlattening, RemovesAGlareAndLeavesEvenLightAlone) {

@@ -84,6 +84,9 @@ class Slam {
   /// The camera's roll, pitch and height of a frame (FrameResult::index), as finish() solved them over the whole
   /// run; before finish(), or when outdoor.smooth_mount is off, the ones the frame was processed with.
   MountState finalMount(int index) const;
+  /// A frame's odometry motion from the previous frame (FrameResult::odometry) as the mounts finalMount()
+  /// gives make it: the same images, with both frames' ground re-projected (unchanged before finish()).
+  Pose2 finalOdometry(int index, const Pose2& odometry) const;
   /// After finish(): how the mount was found to rock and bounce over the run (the smoother's priors); nothing
   /// when the mount was not solved over the run.
   std::optional<MountRocking> mountRocking() const { return mount_rocking_; }

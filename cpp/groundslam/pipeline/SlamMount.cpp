@@ -166,4 +166,10 @@ MountState Slam::finalMount(int index) const {
   return i < final_mounts_.size() ? final_mounts_[i] : used_mounts_[i];
 }
 
+Pose2 Slam::finalOdometry(int index, const Pose2& odometry) const {
+  const size_t i = static_cast<size_t>(index + prior_frames_);
+  if (index < 1 || i >= mount_corrections_.size() || static_cast<int>(i) - 1 < prior_frames_) return odometry;
+  return mount_corrections_[i - 1].inverse() * odometry * mount_corrections_[i];
+}
+
 }  // namespace groundslam
