@@ -195,6 +195,31 @@ TEST(Relocalization, AKidnappedRobotRelocalizesAndTheGapSnapsIntoPlace) {
   EXPECT_LT(m.rotation_mae_deg, 0.2);
 }
 
+TEST(Relocalization, AfterABlankFrameTheGroundSeenJustBeforeFindsTheRobot) {
+  // New ground all along (half a lap), and one blank frame (a covered lens): tracking is lost, and the robot
+  // is still over the ground of the 20 frames before, which are not yet places (the paper's delay).
+  auto settings = session("asphalt", sim::PathKind::loop, 400, 5);
+  settings.ground_seed.reset();
+  const sim::SequenceSimulator simulator(settings);
+  Slam slam(configFor(settings), shippedVocabulary());
+  Trajectory truth;
+  int relocalized_at = -1, lost = 0;
+  for (int i = 0; i < 200; ++i) {
+    const cv::Mat image = i == 120 ? cv::Mat(simulator.renderFrame(i).size(), CV_8U, cv::Scalar(128)) : simulator.renderFrame(i);
+    const FrameResult r = slam.process(image, static_cast<double>(i));
+    if (i != 120) truth.push_back({static_cast<double>(i), simulator.groundTruth()[static_cast<size_t>(i)]});
+    lost += r.status == FrameStatus::lost ? 1 : 0;
+    if (r.status == FrameStatus::relocalized && relocalized_at < 0) relocalized_at = i;
+  }
+  slam.finish();
+  // Frame 120 fails, and so does 121's odometry against it; 121 and 122 localize on frames 100-119 and agree.
+  EXPECT_GE(lost, 1);
+  EXPECT_GE(relocalized_at, 121);
+  EXPECT_LE(relocalized_at, 124);
+  const TrajectoryMetrics m = evaluateTrajectory(truth, slam.trajectory()).metrics;
+  EXPECT_LT(m.ate_rmse_m, 0.003);
+}
+
 TEST(Relocalization, ASecondSessionOnAPriorMapComesOutInTheMapFrame) {
   auto first_settings = session("concrete", sim::PathKind::lawnmower, 300, 1);
   first_settings.path.lane_length_m = 0.5;

@@ -66,7 +66,7 @@ std::vector<LoopCandidate> LoopCloser::process(int frame, int segment, const Gro
   std::vector<LoopCandidate> candidates;
   if (searchDue()) candidates = verifyCandidates(frame, features, bow, estimates);
   pending_.push_back({frame, features, std::move(bow)});
-  admitPlaces(frame, estimates);
+  admitPlaces(frame - settings_.database_delay_frames, estimates);
   return candidates;
 }
 
@@ -112,10 +112,14 @@ std::vector<LoopCandidate> LoopCloser::verifyCandidates(int frame, const GroundF
   return candidates;
 }
 
-void LoopCloser::admitPlaces(int frame, const std::vector<Pose2>& estimates) {
+void LoopCloser::trackingLost(const std::vector<Pose2>& estimates) {
+  if (!pending_.empty()) admitPlaces(pending_.back().frame, estimates);
+}
+
+void LoopCloser::admitPlaces(int last, const std::vector<Pose2>& estimates) {
   // The paper's delay: frame n-k may be found only from frame n on, so neighbours never close loops. It
   // becomes a place unless the map already covers its footprint; then only its pose is kept.
-  while (!pending_.empty() && pending_.front().frame <= frame - settings_.database_delay_frames) {
+  while (!pending_.empty() && pending_.front().frame <= last) {
     Pending& entering = pending_.front();
     const Eigen::Vector2d position = estimates[static_cast<size_t>(entering.frame)].translation();
     if (!places_.covers(position, settings_.place_spacing_m)) {

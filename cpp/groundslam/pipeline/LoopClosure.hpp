@@ -89,6 +89,11 @@ class LoopCloser {
   /// when the next one agrees with odometry; then both are returned as loop candidates (frame_a: the map
   /// keyframe, frame_b: the lost frame) and the frame's segment joins the map segment.
   std::vector<LoopCandidate> relocalize(int frame, const GroundFeatures& features, const std::vector<Pose2>& estimates);
+  /// Tracking was lost after the last frame processed: the frames still waiting their k frames become places
+  /// and map keyframes at once. The delay keeps neighbours from closing loops, and across a loss there are no
+  /// neighbours (candidates never cross segments); relocalization can then find the ground seen just before,
+  /// which is where a robot usually is after a gap.
+  void trackingLost(const std::vector<Pose2>& estimates);
   /// Removes from frame `frame`'s features, while it still waits to become a place, those at these points
   /// (exactly: the caller's copies of the same features), e.g. ones found later to stay still in the image.
   void forgetPendingFeatures(int frame, const std::vector<Eigen::Vector2d>& points);
@@ -120,7 +125,8 @@ class LoopCloser {
   std::vector<LoopCandidate> verifyCandidates(int frame, const GroundFeatures& features, const BowVector& bow,
                                               const std::vector<Pose2>& estimates);
   std::vector<BowMatch> selectCandidates(int frame, const BowVector& bow, const std::vector<Pose2>& estimates) const;
-  void admitPlaces(int frame, const std::vector<Pose2>& estimates);
+  /// Lets the frames waiting up to `last` into the database and the feature map.
+  void admitPlaces(int last, const std::vector<Pose2>& estimates);
   LoopCandidate verify(int frame_a, const GroundFeatures& a, int frame_b, const GroundFeatures& b, double bow_score,
                        const TransformPrior& prior) const;
   /// The estimated T_a_b and how far drift since the last correction may have moved it.

@@ -183,6 +183,7 @@ void Slam::startSegment(const OdometryEdge& failed) {
   const int from = static_cast<int>(graph_.poses().size()) - 1;
   const int to = graph_.addPose(graph_.poses().back() * failed.T_prev_curr);
   graph_.addEdge(informationFreeEdge(from, to, failed.T_prev_curr));
+  loop_closer_->trackingLost(graph_.poses());
   ++segment_;
   lost_ = true;
   lost_since_ = to;
