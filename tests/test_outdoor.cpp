@@ -12,6 +12,7 @@
 #include "groundslam/core/StillFeatures.hpp"
 #include "groundslam/core/MountSmoother.hpp"
 #include "groundslam/eval/TrajectoryMetrics.hpp"
+#include "groundslam/io/VocabularyFile.hpp"
 #include "groundslam/pipeline/Slam.hpp"
 #include "groundslam/sim/Simulator.hpp"
 
@@ -92,8 +93,9 @@ struct ChainResult {
 
 /// A chain of frames 1 cm apart whose mount rocks with amplitude `rocking_deg` and bounces with `bounce_m` (sines),
 /// each frame's mount estimated from the previous frame and the fifth one back with 0.35 px keypoint noise, then
-/// the whole chain smoothed.
-ChainResult smoothChain(double rocking_deg, double bounce_m, int frames) {
+/// the whole chain smoothed. With `loop_offset`, every third frame also sees frame i - loop_offset again (a loop
+/// closure: the same ground, turned by 143 degrees); those factors join the solution, not the choice of priors.
+ChainResult smoothChain(double rocking_deg, double bounce_m, int frames, int loop_offset = 0) {
   std::vector<MountState> truth;
   for (int i = 0; i < frames; ++i) {
     truth.push_back({rocking_deg * kDeg * std::sin(0.3 * i), rocking_deg * kDeg * std::cos(0.23 * i + 0.4), 0.25 + bounce_m * std::sin(0.17 * i + 1.0)});
@@ -119,6 +121,13 @@ ChainResult smoothChain(double rocking_deg, double bounce_m, int frames) {
     FrameMountFactor factor{{i}, e.factor};
     for (int k : e.factor.observations) factor.frames.push_back(frame_of[size_t(k)]);
     factors.push_back(factor);
+    if (loop_offset > 0 && i >= loop_offset && i % 3 == 0) {
+      const Pose2 motion(0.02, 0.01, 2.5);
+      const RayPairs pairs = observe(truth[size_t(i - loop_offset)], truth[size_t(i)], motion, 0.35, 5000 + unsigned(i));
+      const MountEstimate loop = estimateMount({MountObservation{pairs.reference, pairs.current, MountState{0.0, 0.0, 0.25}, motion}},
+                                               defaultCameraMount(0.25), {});
+      if (loop.ok) factors.push_back({{i, i - loop_offset}, loop.factor, false});
+    }
   }
   MountSmoothingSettings settings;
   settings.max_tilt_sigma_rad = 1.0 * kDeg;
@@ -151,6 +160,17 @@ TEST(MountSmoother, TheWholeChainKnowsEachFrameBetterThanItsOwnEstimate) {
   EXPECT_LT(chain.smoothed_height_mm, 1.0);
   EXPECT_GE(chain.rocking.tilt.sigma / kDeg, 0.1);  // the evidence says the mount rocks
   EXPECT_GE(chain.rocking.height.sigma, 0.0003);    // and bounces
+}
+
+TEST(MountSmoother, LoopClosureFactorsSharpenTheChainButDoNotChooseItsPriors) {
+  // Measured: 0.049 -> 0.037 degrees with a loop factor every third frame of the second half; the priors are
+  // the ones the frame-to-frame factors chose (0.25 degrees, correlation 0.9). Were the loop factors to choose
+  // too, these would be 0.5 degrees and 0.98.
+  const ChainResult plain = smoothChain(0.5, 0.002, 120), looped = smoothChain(0.5, 0.002, 120, 60);
+  EXPECT_LT(looped.smoothed_tilt_deg, 0.85 * plain.smoothed_tilt_deg);
+  EXPECT_EQ(looped.rocking.tilt.sigma, plain.rocking.tilt.sigma);
+  EXPECT_EQ(looped.rocking.tilt.correlation, plain.rocking.tilt.correlation);
+  EXPECT_EQ(looped.rocking.height.sigma, plain.rocking.height.sigma);
 }
 
 TEST(MountSmoother, ARigidMountStaysAtTheCalibration) {
@@ -532,6 +552,57 @@ TEST(OutdoorSequence, TheSolvedMountCorrectsTheMotionAtAQuarterTurn) {
   EXPECT_GE(run.wrong_ok, 1);
   EXPECT_EQ(run.wrong_ok_final, 0);
   EXPECT_LT(run.final_motion_error_m, 0.85 * run.motion_error_m);
+}
+
+namespace {
+
+struct LoopRun {
+  double ate_m = 0.0;
+  double tilt_error_rad = 0.0;  ///< RMS per axis of the mounts solved over the run
+  int loop_closures = 0;
+};
+
+/// Full SLAM (loop closure on) over a rocking, bouncing asphalt loop driven twice.
+LoopRun runRockingLoop(bool mount_from_loops) {
+  sim::SimulationSettings s = rockingSequence(false);
+  s.path.frames = 240;
+  s.path.laps = 2;
+  const sim::SequenceSimulator simulator(s);
+  Config config;
+  config.camera = cameraConfigOf(s.camera, s.mounting_height_m);
+  config.outdoor.mount_from_loops = mount_from_loops;
+  static const auto vocabulary =
+      std::make_shared<const Vocabulary>(readVocabulary(std::string(GROUNDSLAM_SOURCE_DIR) + "/config/vocabulary/ground.gslmvoc"));
+  Slam slam(config, vocabulary);
+  Trajectory truth;
+  LoopRun run;
+  for (int i = 0; i < simulator.frameCount(); ++i) {
+    run.loop_closures += slam.process(simulator.renderFrame(i), i).loop_closures;
+    truth.push_back({double(i), simulator.groundTruth()[size_t(i)]});
+  }
+  slam.finish();
+  double error2 = 0.0;
+  for (int i = 0; i < simulator.frameCount(); ++i) {
+    const MountState mount = slam.finalMount(i);
+    const Eigen::Vector3d true_mount = simulator.mountStateAt(i);
+    error2 += std::pow(mount.roll_rad - true_mount.x(), 2) + std::pow(mount.pitch_rad - true_mount.y(), 2);
+  }
+  run.tilt_error_rad = std::sqrt(error2 / (2.0 * simulator.frameCount()));
+  run.ate_m = evaluateTrajectory(truth, slam.trajectory()).metrics.ate_rmse_m;
+  return run;
+}
+
+}  // namespace
+
+TEST(OutdoorSequence, LoopClosuresTieTheMountAcrossTheRun) {
+  // Measured: 37 loop closures; tilt error of the solved mounts 0.138 -> 0.126 degrees (true: 0.5 RMS), ATE
+  // 0.94 -> 0.89 mm. A loop factor tied to the wrong frames (the two swapped) gives 0.47 degrees and 2.6 mm.
+  const LoopRun with = runRockingLoop(true), without = runRockingLoop(false);
+  EXPECT_GE(with.loop_closures, 30);
+  EXPECT_EQ(with.loop_closures, without.loop_closures);  // the factors change the mount, not the graph
+  EXPECT_LT(with.tilt_error_rad, 0.95 * without.tilt_error_rad);
+  EXPECT_LT(with.ate_m, without.ate_m);
+  EXPECT_LT(with.ate_m, 0.0011);
 }
 
 TEST(IlluminationFlattening, RemovesAGlareAndLeavesEvenLightAlone) {

@@ -29,13 +29,14 @@ struct NormalEquations {
   Eigen::VectorXd eta;
 };
 
-NormalEquations normalEquations(int first, int count, const std::vector<FrameMountFactor>& factors, const Eigen::Vector3d& nominal) {
+NormalEquations normalEquations(int first, int count, const std::vector<FrameMountFactor>& factors, const Eigen::Vector3d& nominal,
+                                bool choosing_priors) {
   NormalEquations system;
   system.first = first;
   system.count = count;
   system.eta = Eigen::VectorXd::Zero(kState * static_cast<Eigen::Index>(count));
   for (const FrameMountFactor& f : factors) {
-    if (!usable(f)) continue;
+    if (!usable(f) || (choosing_priors && !f.chooses_priors)) continue;
     bool inside = true;
     for (int frame : f.frames) inside = inside && frame >= first && frame < first + count;
     if (!inside) continue;
@@ -152,12 +153,14 @@ MountSmoothing smoothMounts(int frames, const std::vector<FrameMountFactor>& fac
   }
   first = std::clamp(first, 0, frames - 1);
   const int window = std::min(frames - first, std::max(1, settings.search_frames));
-  const NormalEquations search = normalEquations(first, window, factors, nominal);
+  const NormalEquations search = normalEquations(first, window, factors, nominal, true);
   Hypothesis h{{settings.max_tilt_sigma_rad / 8.0, 0.8}, {settings.max_height_sigma_m / 8.0, 0.8}};
   for (Part part : {Part::tilt, Part::height, Part::tilt, Part::height}) choose(search, h, part, settings);
   result.rocking = {h.tilt, h.height};
-  // The whole run (the search's own system when the window already covers it).
-  const auto solution = first == 0 && window == frames ? solve(search, h) : solve(normalEquations(0, frames, factors, nominal), h);
+  // The whole run, with every factor (the search's own system when it already holds them all).
+  const bool search_holds_all = first == 0 && window == frames &&
+                                std::all_of(factors.begin(), factors.end(), [](const FrameMountFactor& f) { return f.chooses_priors; });
+  const auto solution = search_holds_all ? solve(search, h) : solve(normalEquations(0, frames, factors, nominal, false), h);
   if (!solution) return result;
   result.states.resize(static_cast<size_t>(frames));
   for (int i = 0; i < frames; ++i) {

@@ -94,6 +94,9 @@ struct OutdoorConfig {
   /// At the end of the run, every frame's roll, pitch and height are solved again from all the estimates at once
   /// (core/MountSmoother) and the trajectory is corrected for them.
   bool smooth_mount = true;
+  /// With smooth_mount: each accepted loop closure's pair of views adds its factor too, tying the two frames'
+  /// mounts across the run (the places keep their rays for it).
+  bool mount_from_loops = true;
   double height_prior_m = 0.003;   ///< standard deviation of the height around the calibrated height
   /// Images give the height only relative to the reference frame's, so errors would add up frame after
   /// frame; each frame gives back this fraction of its difference from the calibrated height (a mount
@@ -259,6 +262,7 @@ void visitConfigFields(Config_& c, Visitor&& v) {
   v("outdoor", "estimate_mount", c.outdoor.estimate_mount, Range{});
   v("outdoor", "tilt_prior_deg", c.outdoor.tilt_prior_deg, Range{0.0, 45.0, true});
   v("outdoor", "smooth_mount", c.outdoor.smooth_mount, Range{});
+  v("outdoor", "mount_from_loops", c.outdoor.mount_from_loops, Range{});
   v("outdoor", "height_prior_m", c.outdoor.height_prior_m, kPositive);
   v("outdoor", "height_return", c.outdoor.height_return, Range{0.0, 1.0});
   v("outdoor", "reference_sigma_deg", c.outdoor.reference_sigma_deg, Range{0.0, 45.0, true});

@@ -18,13 +18,15 @@ GroundFeatures Place::features() const {
   GroundFeatures features;
   features.points.reserve(points.size());
   for (const Eigen::Vector2f& p : points) features.points.push_back(p.cast<double>());
+  features.rays.reserve(rays.size());
+  for (const Eigen::Vector2f& r : rays) features.rays.push_back(r.cast<double>());
   features.descriptors = descriptors;  // shares the data
   return features;
 }
 
 size_t Place::bytes() const {
   const size_t bow_bytes = bow.size() * sizeof(BowVector::value_type);
-  return sizeof(Place) + points.size() * sizeof(Eigen::Vector2f) + descriptors.total() * descriptors.elemSize() +
+  return sizeof(Place) + (points.size() + rays.size()) * sizeof(Eigen::Vector2f) + descriptors.total() * descriptors.elemSize() +
          2 * bow_bytes;  // the vector and its postings in the database
 }
 
@@ -65,6 +67,10 @@ void PlaceMap::add(int frame, const Eigen::Vector2d& position, const GroundFeatu
   place.position = position;
   place.points.reserve(features.size());
   for (const Eigen::Vector2d& p : features.points) place.points.push_back(p.cast<float>());
+  if (features.hasRays()) {
+    place.rays.reserve(features.size());
+    for (const Eigen::Vector2d& r : features.rays) place.rays.push_back(r.cast<float>());
+  }
   place.descriptors = features.descriptors.clone();  // its own compact buffer, not a view into a larger one
   place.bow = std::move(bow);
   database_.add(frame, place.bow);

@@ -26,6 +26,7 @@ struct Place {
   int frame = 0;
   Eigen::Vector2d position = Eigen::Vector2d::Zero();  ///< the frame's estimated position, kept current by moveFrom
   std::vector<Eigen::Vector2f> points;
+  std::vector<Eigen::Vector2f> rays;  ///< the points' normalised image rays, when the frame's features had them
   cv::Mat descriptors;
   BowVector bow;
 

@@ -155,7 +155,8 @@ Keyframe Slam::groundOf(const Keyframe& current, const std::vector<Match>& still
   Keyframe ground{current.index, current.timestamp,
                   artifact_mask_.withoutArtifacts(still.empty() ? current.features : selectFeatures(current.features, moving)),
                   current.mount};
-  ground.features.rays.clear();
+  // Places keep the rays only for the mount solved over the run (a loop closure's pair of views is a factor).
+  if (!mountFromLoops()) ground.features.rays.clear();
   if (loop_closer_ && previous_ && !still.empty()) {
     // The previous frame's side of the same matches (its first frame's included, which no match had judged yet).
     std::vector<Eigen::Vector2d> previous_still;
@@ -263,6 +264,7 @@ void Slam::closeLoops(const Keyframe& current, FrameResult& result) {
     if (!candidate.accepted()) continue;
     graph_.addEdge({candidate.frame_a, candidate.frame_b, candidate.T_a_b,
                     informationFrom(candidate.covariance, config_.graph.min_sigma_m, config_.graph.min_sigma_rad), true});
+    if (mountFromLoops()) addLoopMountFactor(candidate, current);
     ++result.loop_closures;
     ++unoptimised_loops_;
     if (candidate.correction_m > config_.graph.full_optimisation_correction_m) full_optimisation_due_ = true;

@@ -124,6 +124,16 @@ class Slam {
   /// The oldest recent frame of this segment, other than the previous one, within the mount estimation's
   /// baseline of the current pose (empty when there is none or it does not match).
   std::optional<MountReference> farReference(const Keyframe& current, const OdometryEdge& odometry) const;
+  MountEstimationSettings mountSettings() const;
+  bool mountFromLoops() const {
+    return config_.outdoor.estimate_mount && config_.outdoor.smooth_mount && config_.outdoor.mount_from_loops;
+  }
+  /// The factor of a frame's estimate against one of its references (divided by outdoor.variance_inflation, as
+  /// every factor is) into mount_factors_.
+  void keepMountFactor(const MountEstimate& estimate, const std::vector<int>& frames, bool chooses_priors);
+  /// An accepted loop closure is a pair of views like any other, with a baseline of minutes instead of a
+  /// frame: its factor ties the two frames' mounts across the run (the place must have kept its rays).
+  void addLoopMountFactor(const LoopCandidate& loop, const Keyframe& current);
   OdometryEdge fallbackOdometry(OdometryEdge failed) const;
   /// False when the motion's translation is far from the last good motion's, scaled to the time between frames
   /// (config odometry.max_velocity_change_*).

@@ -35,6 +35,56 @@ std::optional<Slam::MountReference> Slam::farReference(const Keyframe& current, 
   return std::nullopt;
 }
 
+MountEstimationSettings Slam::mountSettings() const {
+  MountEstimationSettings settings;
+  settings.tilt_prior_rad = config_.outdoor.tilt_prior_deg * M_PI / 180.0;
+  settings.height_prior_m = config_.outdoor.height_prior_m;
+  settings.reference_sigma_rad = config_.outdoor.reference_sigma_deg * M_PI / 180.0;
+  settings.point_sigma_m = config_.outdoor.point_sigma_px * ground_sample_m_;
+  settings.max_pairs = config_.outdoor.max_pairs;
+  return settings;
+}
+
+void Slam::keepMountFactor(const MountEstimate& estimate, const std::vector<int>& frames, bool chooses_priors) {
+  if (estimate.factor.information.size() == 0) return;
+  // frames: the current frame, then one per observation the estimate was given.
+  FrameMountFactor factor{{frames.front()}, estimate.factor, chooses_priors};
+  // The estimate's own variance understates its error (see variance_inflation): so does its factor's information.
+  factor.factor.information /= config_.outdoor.variance_inflation;
+  factor.factor.gradient /= config_.outdoor.variance_inflation;
+  for (int k : estimate.factor.observations) factor.frames.push_back(frames[static_cast<size_t>(k) + 1]);
+  mount_factors_.push_back(std::move(factor));
+}
+
+void Slam::addLoopMountFactor(const LoopCandidate& loop, const Keyframe& current) {
+  const Place* place = loop_closer_->places().find(loop.frame_a);
+  if (place == nullptr || static_cast<size_t>(loop.frame_a) >= used_mounts_.size() || !current.features.hasRays()) return;
+  const GroundFeatures reference = place->features();
+  if (!reference.hasRays()) return;
+  // The loop's own transform is right to a fraction of a millimetre: guided matches around it, refined, and
+  // the pairs that agree with the refinement, as for a far reference.
+  const std::vector<Match> matches =
+      matchNearby(current.features, reference, loop.T_a_b, config_.outdoor.reference_match_radius_m, config_.matching.ratio);
+  std::vector<Eigen::Vector2d> reference_points, current_points;
+  for (const Match& m : matches) {
+    reference_points.push_back(reference.points[static_cast<size_t>(m.train)]);
+    current_points.push_back(current.features.points[static_cast<size_t>(m.query)]);
+  }
+  const RigidEstimate fit = refineRigidTransform(reference_points, current_points, loop.T_a_b, odometry_fitting_);
+  if (!fit.ok()) return;
+  MountObservation o;
+  o.reference = used_mounts_[static_cast<size_t>(loop.frame_a)];
+  o.T_guess = fit.T_target_source;
+  const double inlier2 = mount_pair_radius_m_ * mount_pair_radius_m_;
+  for (size_t i = 0; i < matches.size(); ++i) {
+    if ((fit.T_target_source * current_points[i] - reference_points[i]).squaredNorm() > inlier2) continue;
+    o.reference_rays.push_back(reference.rays[static_cast<size_t>(matches[i].train)]);
+    o.current_rays.push_back(current.features.rays[static_cast<size_t>(matches[i].query)]);
+  }
+  const MountEstimate estimate = estimateMount({o}, calibrated_mount_, mountSettings());
+  if (estimate.ok) keepMountFactor(estimate, {current.index, loop.frame_a}, false);
+}
+
 double Slam::Spread::keep(double square, double variance, int count) {
   const double rate = 1.0 / std::min(count, 50);  // a plain mean at first, then the last 50 or so frames
   square_mean += rate * (square - square_mean);
@@ -72,22 +122,9 @@ void Slam::estimateMountOf(const Keyframe& previous, Keyframe& current, Odometry
     }
     observations.push_back(std::move(o));
   }
-  MountEstimationSettings settings;
-  settings.tilt_prior_rad = config_.outdoor.tilt_prior_deg * M_PI / 180.0;
-  settings.height_prior_m = config_.outdoor.height_prior_m;
-  settings.reference_sigma_rad = config_.outdoor.reference_sigma_deg * M_PI / 180.0;
-  settings.point_sigma_m = config_.outdoor.point_sigma_px * ground_sample_m_;
-  settings.max_pairs = config_.outdoor.max_pairs;
-  const MountEstimate estimate = estimateMount(observations, calibrated_mount_, settings);
+  const MountEstimate estimate = estimateMount(observations, calibrated_mount_, mountSettings());
   if (!estimate.ok) return;
-  if (estimate.factor.information.size() > 0) {
-    FrameMountFactor factor{{current.index}, estimate.factor};
-    // The estimate's own variance understates its error (see variance_inflation): so does its factor's information.
-    factor.factor.information /= config_.outdoor.variance_inflation;
-    factor.factor.gradient /= config_.outdoor.variance_inflation;
-    for (int k : estimate.factor.observations) factor.frames.push_back(observed_frames[static_cast<size_t>(k) + 1]);
-    mount_factors_.push_back(std::move(factor));
-  }
+  keepMountFactor(estimate, observed_frames, true);
   // Empirical Bayes: the estimate is shrunk toward the calibrated mount by the share of the estimates' spread
   // that is noise (hardly shrunk on a rocking mount with a clear view, all the way on a rigid one).
   const MountState& e = estimate.current;
