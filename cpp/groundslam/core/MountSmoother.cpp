@@ -157,6 +157,7 @@ MountSmoothing smoothMounts(int frames, const std::vector<FrameMountFactor>& fac
   Hypothesis h{{settings.max_tilt_sigma_rad / 8.0, 0.8}, {settings.max_height_sigma_m / 8.0, 0.8}};
   for (Part part : {Part::tilt, Part::height, Part::tilt, Part::height}) choose(search, h, part, settings);
   result.rocking = {h.tilt, h.height};
+  result.plausible = h.tilt.sigma < settings.max_tilt_sigma_rad * (1.0 - 1e-9);
   // The whole run, with every factor (the search's own system when it already holds them all).
   const bool search_holds_all = first == 0 && window == frames &&
                                 std::all_of(factors.begin(), factors.end(), [](const FrameMountFactor& f) { return f.chooses_priors; });

@@ -46,6 +46,11 @@ struct MountRocking {
 struct MountSmoothing {
   std::vector<MountState> states;  ///< per frame; empty when nothing could be solved
   MountRocking rocking;            ///< the priors chosen: how the mount rocks and bounces, as the factors tell
+  /// False when only the widest tilt prior (max_tilt_sigma_rad, the bound on the mount's rocking) explains the
+  /// factors: not a rocking mount but images that misled every estimate alike (measured: a weak texture under
+  /// the robot's shadow, glare and a bumper, where the solved tilt was worse than none). Such states are not
+  /// to be used.
+  bool plausible = false;
 };
 
 /// Every frame's state, frames 0 .. frames-1 in the order they were taken, minimising the factors' costs (a

@@ -171,10 +171,7 @@ void Slam::smoothMount() {
   const MountSmoothing smoothing = smoothMounts(frames, mount_factors_, settings);
   if (smoothing.states.size() != static_cast<size_t>(frames)) return;
   mount_rocking_ = smoothing.rocking;
-  // Estimates that only a tilt wandering as widely as outdoor.tilt_prior_deg (the bound on the mount's rocking)
-  // explains are not a rocking mount but images that misled every estimate alike (measured: a weak texture
-  // under the robot's shadow, glare and a bumper, where the smoothed tilt was worse than none): not used.
-  if (smoothing.rocking.tilt.sigma >= settings.max_tilt_sigma_rad * (1.0 - 1e-9)) return;
+  if (!smoothing.plausible) return;  // only the widest tilt prior explains the estimates (MountSmoothing::plausible)
   // The correction moves each pose so that the ground its image shows, projected with the final mount, lands
   // where the graph put it with the mount the frame was processed with.
   const CameraIntrinsics& k = camera_.intrinsics();
