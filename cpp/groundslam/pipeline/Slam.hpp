@@ -124,6 +124,9 @@ class Slam {
   /// The oldest recent frame of this segment, other than the previous one, within the mount estimation's
   /// baseline of the current pose (empty when there is none or it does not match).
   std::optional<MountReference> farReference(const Keyframe& current, const OdometryEdge& odometry) const;
+  /// The matches whose points T_reference_current brings within the mount estimate's pair radius.
+  std::vector<Match> mountPairs(const std::vector<Match>& matches, const GroundFeatures& current, const GroundFeatures& reference,
+                                const Pose2& T_reference_current) const;
   MountEstimationSettings mountSettings() const;
   bool mountFromLoops() const {
     return config_.outdoor.estimate_mount && config_.outdoor.smooth_mount && config_.outdoor.mount_from_loops;

@@ -7,6 +7,36 @@
 #include "groundslam/pipeline/StageTimer.hpp"
 
 namespace groundslam {
+namespace {
+
+/// One reference's pairs as the mount estimate takes them: the rays of both sides.
+MountObservation observationOf(const GroundFeatures& reference, const MountState& reference_mount, const GroundFeatures& current,
+                               const std::vector<Match>& pairs, const Pose2& T_reference_current) {
+  MountObservation o;
+  o.reference = reference_mount;
+  o.T_guess = T_reference_current;
+  for (const Match& m : pairs) {
+    o.reference_rays.push_back(reference.rays[static_cast<size_t>(m.train)]);
+    o.current_rays.push_back(current.rays[static_cast<size_t>(m.query)]);
+  }
+  return o;
+}
+
+}  // namespace
+
+std::vector<Match> Slam::mountPairs(const std::vector<Match>& matches, const GroundFeatures& current, const GroundFeatures& reference,
+                                    const Pose2& T_reference_current) const {
+  std::vector<Match> pairs;
+  const double inlier2 = mount_pair_radius_m_ * mount_pair_radius_m_;
+  const Eigen::Matrix2d R = T_reference_current.rotation();  // once, not per match
+  for (const Match& m : matches) {
+    const Eigen::Vector2d& q = current.points[static_cast<size_t>(m.query)];
+    if ((R * q + T_reference_current.translation() - reference.points[static_cast<size_t>(m.train)]).squaredNorm() <= inlier2) {
+      pairs.push_back(m);
+    }
+  }
+  return pairs;
+}
 
 std::optional<Slam::MountReference> Slam::farReference(const Keyframe& current, const OdometryEdge& odometry) const {
   if (recent_.size() < 2) return std::nullopt;
@@ -21,16 +51,7 @@ std::optional<Slam::MountReference> Slam::farReference(const Keyframe& current, 
     // short a baseline: refined from it, no RANSAC.
     const RigidEstimate fit = refineMatches(matches, candidate, current, predicted);
     if (!fit.ok()) return std::nullopt;
-    MountReference reference{&candidate, {}, fit.T_target_source};
-    const double inlier2 = mount_pair_radius_m_ * mount_pair_radius_m_;
-    const Eigen::Matrix2d R = fit.T_target_source.rotation();  // once, not per match
-    for (const Match& m : matches) {
-      const Eigen::Vector2d& q = current.features.points[static_cast<size_t>(m.query)];
-      if ((R * q + fit.T_target_source.translation() - candidate.features.points[static_cast<size_t>(m.train)]).squaredNorm() <= inlier2) {
-        reference.matches.push_back(m);
-      }
-    }
-    return reference;
+    return MountReference{&candidate, mountPairs(matches, current.features, candidate.features, fit.T_target_source), fit.T_target_source};
   }
   return std::nullopt;
 }
@@ -72,15 +93,8 @@ void Slam::addLoopMountFactor(const LoopCandidate& loop, const Keyframe& current
   }
   const RigidEstimate fit = refineRigidTransform(reference_points, current_points, loop.T_a_b, odometry_fitting_);
   if (!fit.ok()) return;
-  MountObservation o;
-  o.reference = used_mounts_[static_cast<size_t>(loop.frame_a)];
-  o.T_guess = fit.T_target_source;
-  const double inlier2 = mount_pair_radius_m_ * mount_pair_radius_m_;
-  for (size_t i = 0; i < matches.size(); ++i) {
-    if ((fit.T_target_source * current_points[i] - reference_points[i]).squaredNorm() > inlier2) continue;
-    o.reference_rays.push_back(reference.rays[static_cast<size_t>(matches[i].train)]);
-    o.current_rays.push_back(current.features.rays[static_cast<size_t>(matches[i].query)]);
-  }
+  const MountObservation o = observationOf(reference, used_mounts_[static_cast<size_t>(loop.frame_a)], current.features,
+                                           mountPairs(matches, current.features, reference, fit.T_target_source), fit.T_target_source);
   const MountEstimate estimate = estimateMount({o}, calibrated_mount_, mountSettings());
   if (estimate.ok) keepMountFactor(estimate, {current.index, loop.frame_a}, false);
 }
@@ -98,29 +112,14 @@ void Slam::estimateMountOf(const Keyframe& previous, Keyframe& current, Odometry
   // The previous frame and, when there is one, a frame farther back: the tilt shows better over a baseline.
   std::vector<MountReference> references;
   if (auto far = farReference(current, odometry)) references.push_back(std::move(*far));
-  MountReference from_previous{&previous, {}, odometry.T_prev_curr};
-  const double inlier2 = mount_pair_radius_m_ * mount_pair_radius_m_;
-  const Eigen::Matrix2d R = odometry.T_prev_curr.rotation();
-  for (const Match& m : odometry.used) {
-    const size_t q = static_cast<size_t>(m.query), t = static_cast<size_t>(m.train);
-    if ((R * current.features.points[q] + odometry.T_prev_curr.translation() - previous.features.points[t]).squaredNorm() <= inlier2) {
-      from_previous.matches.push_back(m);
-    }
-  }
-  references.push_back(std::move(from_previous));
+  references.push_back({&previous, mountPairs(odometry.used, current.features, previous.features, odometry.T_prev_curr), odometry.T_prev_curr});
   std::vector<MountObservation> observations;
   std::vector<int> observed_frames = {current.index};
   for (const MountReference& reference : references) {
     if (!reference.keyframe->features.hasRays()) continue;
     observed_frames.push_back(reference.keyframe->index);
-    MountObservation o;
-    o.reference = reference.keyframe->mount;
-    o.T_guess = reference.T_reference_current;
-    for (const Match& m : reference.matches) {
-      o.reference_rays.push_back(reference.keyframe->features.rays[static_cast<size_t>(m.train)]);
-      o.current_rays.push_back(current.features.rays[static_cast<size_t>(m.query)]);
-    }
-    observations.push_back(std::move(o));
+    observations.push_back(observationOf(reference.keyframe->features, reference.keyframe->mount, current.features, reference.matches,
+                                         reference.T_reference_current));
   }
   const MountEstimate estimate = estimateMount(observations, calibrated_mount_, mountSettings());
   if (!estimate.ok) return;
