@@ -23,8 +23,8 @@ case "$condition" in
                             --spin-deg 75 --drop-frames 0.02 --drop-max 8) ;;
   *) echo "unknown CONDITION '$condition' (standard | outdoor | outdoor_heavy)" >&2; exit 2 ;;
 esac
-echo "| texture | path | frames | odometry cm/m | odometry deg | SLAM cm/m | SLAM deg | SLAM ATE mm | loops accepted | wrong | precision | recall | fallback or lost frames | wrong ok motions | low-overlap frames (off) | tilt error deg |"
-echo "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
+echo "| texture | path | frames | odometry cm/m | odometry deg | SLAM cm/m | SLAM deg | SLAM ATE mm | loops accepted | wrong | precision | recall | fallback or lost frames | wrong ok motions | low-overlap frames (off) | sharp-turn and gap frames (off) | tilt error deg |"
+echo "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
 for kind in $kinds; do
   for path in $paths; do
     seq="$out/${kind}_${path}"
@@ -47,12 +47,14 @@ c = json.loads(motion)
 l = m["loop_closure"]
 wrong = c.get("silent_wrong_motions", "n/a")
 low = f"{c['low_overlap_frames']} ({c['low_overlap_off']})" if "low_overlap_frames" in c else "n/a"  # off: > 5 mm or 0.5 deg
+turns = (f"{c['sharp_turn_frames']} + {c['gap_frames']} ({c['sharp_turn_off']} + {c['gap_off']})"
+         if "sharp_turn_frames" in c else "n/a")
 tilt = c.get("tilt_rms_error_deg")
 tilt = f"{tilt:.2f} of {c['tilt_rms_true_deg']:.2f}" if isinstance(tilt, float) and tilt == tilt else "n/a"
 ratio = lambda v: "n/a" if v is None else f"{v:.3f}"  # null: nothing accepted (precision) or nothing true (recall)
 print(f"| {kind} | {path} | {m['paired_frames']} | {o['translation_mae_cm_per_m']:.3f} | {o['rotation_mae_deg']:.3f} | "
       f"{m['translation_mae_cm_per_m']:.3f} | {m['rotation_mae_deg']:.3f} | {1000 * m['ate_rmse_m']:.2f} | "
-      f"{l['accepted']} | {l['wrong_accepted']} | {ratio(l['precision'])} | {ratio(l['recall'])} | {fallback} | {wrong} | {low} | {tilt} |")
+      f"{l['accepted']} | {l['wrong_accepted']} | {ratio(l['precision'])} | {ratio(l['recall'])} | {fallback} | {wrong} | {low} | {turns} | {tilt} |")
 PY
   done
 done

@@ -203,7 +203,7 @@ TEST(Slam, AMotionUnlikeTheRobotsSpeedIsBelievedOnlyWhenTheImagesLeaveNoDoubt) {
     return results;
   };
   const std::vector<FrameResult> believed = run(configFor(settings));
-  EXPECT_EQ(believed[10].statusName(), "ok");
+  EXPECT_EQ(believed[10].statusName(), "gap");  // measured, and said to span 7 frames' travel
   EXPECT_LT((believed[10].odometry.translation() - true_jump.translation()).norm(), 0.002);
   EXPECT_EQ(believed[11].statusName(), "ok");
 
@@ -212,10 +212,15 @@ TEST(Slam, AMotionUnlikeTheRobotsSpeedIsBelievedOnlyWhenTheImagesLeaveNoDoubt) {
   const std::vector<FrameResult> refused = run(doubting);
   EXPECT_EQ(refused[10].statusName(), "fallback_implausible_motion");
   EXPECT_EQ(refused[11].statusName(), "ok");  // the speed is unknown after a failed frame: not judged
-  // The same jump with its true time (7 intervals) is an ordinary motion.
+  // The same jump with its true time (7 intervals) is the robot's speed: believed, and a gap all the same.
   Slam timed(doubting, nullptr);
   for (int i = 0; i < 10; ++i) timed.process(simulator.renderFrame(i), i);
-  EXPECT_EQ(timed.process(simulator.renderFrame(16), 16.0).statusName(), "ok");
+  EXPECT_EQ(timed.process(simulator.renderFrame(16), 16.0).statusName(), "gap");
+  // Without the gap check it is an ordinary motion.
+  doubting.odometry_checks.gap_min_steps = 0.0;
+  Slam unchecked(doubting, nullptr);
+  for (int i = 0; i < 10; ++i) unchecked.process(simulator.renderFrame(i), i);
+  EXPECT_EQ(unchecked.process(simulator.renderFrame(16), 16.0).statusName(), "ok");
 }
 
 TEST(Slam, OnARepeatedFloorAJumpUnlikeTheRobotsSpeedStaysRefused) {

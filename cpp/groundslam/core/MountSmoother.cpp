@@ -13,6 +13,7 @@ namespace {
 
 constexpr int kState = 3;  // roll, pitch, height
 constexpr double kCorrelations[] = {0.0, 0.5, 0.8, 0.9, 0.95, 0.98};
+constexpr double kMaxSteps = 1000.0;  // 0.98^1000: the frames are independent
 
 bool usable(const FrameMountFactor& f) {
   const auto size = static_cast<Eigen::Index>(kState * f.frames.size());
@@ -69,29 +70,34 @@ struct Solution {
   double evidence = -std::numeric_limits<double>::infinity();
 };
 
-/// The posterior mean under a hypothesis and log p(factors | hypothesis) up to a constant.
-std::optional<Solution> solve(const NormalEquations& system, const Hypothesis& h) {
+/// The posterior mean under a hypothesis and log p(factors | hypothesis) up to a constant. steps[i] (window
+/// frame i): the rocking steps since window frame i - 1, so the correlation between them is rho^steps[i].
+std::optional<Solution> solve(const NormalEquations& system, const Hypothesis& h, const std::vector<double>& steps) {
   const int n = system.count;
   std::vector<Eigen::Triplet<double>> entries;
-  entries.reserve(system.entries.size() + static_cast<size_t>(3 * kState * n));
+  entries.reserve(system.entries.size() + static_cast<size_t>(4 * kState * n));
   entries.insert(entries.end(), system.entries.begin(), system.entries.end());
   double prior_log_det = 0.0;
   for (int component = 0; component < kState; ++component) {
     const Rocking& r = component < 2 ? h.tilt : h.height;
-    const double rho = n > 1 ? r.correlation : 0.0;
-    // The AR(1) precision: tridiagonal, (1 / (sigma^2 (1 - rho^2))) times 1, 1 + rho^2, ..., 1 + rho^2, 1 on the
-    // diagonal and -rho beside it; its log determinant -n log sigma^2 - (n - 1) log(1 - rho^2).
-    const double c = 1.0 / (r.sigma * r.sigma * (1.0 - rho * rho));
-    for (int i = 0; i < n; ++i) {
+    const double variance = r.sigma * r.sigma;
+    // The AR(1) chain: x_0 ~ N(0, sigma^2), x_i | x_(i-1) ~ N(rho_i x_(i-1), sigma^2 (1 - rho_i^2)) with rho_i =
+    // rho^steps_i. Its precision is tridiagonal; its log determinant -n log sigma^2 - sum log(1 - rho_i^2).
+    // With every step 1 it is the textbook 1, 1 + rho^2, ..., 1 + rho^2, 1 over sigma^2 (1 - rho^2).
+    entries.emplace_back(component, component, 1.0 / variance);
+    for (int i = 1; i < n; ++i) {
+      const double rho = r.correlation == 0.0 ? 0.0 : std::pow(r.correlation, steps[static_cast<size_t>(i)]);
+      const double c = 1.0 / (variance * (1.0 - rho * rho));
       const Eigen::Index row = kState * i + component;
-      const bool inner = i > 0 && i < n - 1;
-      entries.emplace_back(row, row, n == 1 ? 1.0 / (r.sigma * r.sigma) : c * (inner ? 1.0 + rho * rho : 1.0));
-      if (i > 0 && rho != 0.0) {
+      entries.emplace_back(row, row, c);
+      if (rho != 0.0) {
+        entries.emplace_back(row - kState, row - kState, rho * rho * c);
         entries.emplace_back(row, row - kState, -rho * c);
         entries.emplace_back(row - kState, row, -rho * c);
       }
+      prior_log_det -= std::log(1.0 - rho * rho);
     }
-    prior_log_det += -n * std::log(r.sigma * r.sigma) - (n - 1) * std::log(1.0 - rho * rho);
+    prior_log_det -= n * std::log(variance);
   }
   const Eigen::Index size = kState * static_cast<Eigen::Index>(n);
   Eigen::SparseMatrix<double> A(size, size);
@@ -111,11 +117,12 @@ std::optional<Solution> solve(const NormalEquations& system, const Hypothesis& h
 enum class Part { tilt, height };
 
 /// The best value of one part of the hypothesis (the others held) by the evidence.
-void choose(const NormalEquations& system, Hypothesis& h, Part part, const MountSmoothingSettings& settings) {
+void choose(const NormalEquations& system, Hypothesis& h, Part part, const MountSmoothingSettings& settings,
+            const std::vector<double>& steps) {
   double best = -std::numeric_limits<double>::infinity();
   Hypothesis chosen = h;
   const auto consider = [&](const Hypothesis& candidate) {
-    const auto solution = solve(system, candidate);
+    const auto solution = solve(system, candidate, steps);
     if (solution && solution->evidence > best) best = solution->evidence, chosen = candidate;
   };
   const double max_sigma = part == Part::tilt ? settings.max_tilt_sigma_rad : settings.max_height_sigma_m;
@@ -138,11 +145,18 @@ void choose(const NormalEquations& system, Hypothesis& h, Part part, const Mount
 
 }  // namespace
 
-MountSmoothing smoothMounts(int frames, const std::vector<FrameMountFactor>& factors, const MountSmoothingSettings& settings) {
+MountSmoothing smoothMounts(int frames, const std::vector<FrameMountFactor>& factors, const MountSmoothingSettings& settings,
+                            const std::vector<double>& steps) {
   MountSmoothing result;
   if (frames <= 0 || !(settings.max_tilt_sigma_rad > 0.0) || !(settings.max_height_sigma_m > 0.0) ||
       !std::isfinite(settings.max_tilt_sigma_rad) || !std::isfinite(settings.max_height_sigma_m)) {
     return result;
+  }
+  // One step between frames unless told more (a missing, NaN or smaller value is one step; infinity: the
+  // frames are independent, as across a lost frame).
+  std::vector<double> all_steps(static_cast<size_t>(frames), 1.0);
+  for (size_t i = 0; i < all_steps.size() && i < steps.size(); ++i) {
+    if (!std::isnan(steps[i])) all_steps[i] = std::clamp(steps[i], 1.0, kMaxSteps);
   }
   const Eigen::Vector3d nominal(0.0, 0.0, settings.nominal_height_m);
   // The hypothesis is chosen on a window from the first frame with a factor (a bounded cost however long the
@@ -154,14 +168,16 @@ MountSmoothing smoothMounts(int frames, const std::vector<FrameMountFactor>& fac
   first = std::clamp(first, 0, frames - 1);
   const int window = std::min(frames - first, std::max(1, settings.search_frames));
   const NormalEquations search = normalEquations(first, window, factors, nominal, true);
+  const std::vector<double> search_steps(all_steps.begin() + first, all_steps.begin() + first + window);
   Hypothesis h{{settings.max_tilt_sigma_rad / 8.0, 0.8}, {settings.max_height_sigma_m / 8.0, 0.8}};
-  for (Part part : {Part::tilt, Part::height, Part::tilt, Part::height}) choose(search, h, part, settings);
+  for (Part part : {Part::tilt, Part::height, Part::tilt, Part::height}) choose(search, h, part, settings, search_steps);
   result.rocking = {h.tilt, h.height};
   result.plausible = h.tilt.sigma < settings.max_tilt_sigma_rad * (1.0 - 1e-9);
   // The whole run, with every factor (the search's own system when it already holds them all).
   const bool search_holds_all = first == 0 && window == frames &&
                                 std::all_of(factors.begin(), factors.end(), [](const FrameMountFactor& f) { return f.chooses_priors; });
-  const auto solution = search_holds_all ? solve(search, h) : solve(normalEquations(0, frames, factors, nominal, false), h);
+  const auto solution = search_holds_all ? solve(search, h, all_steps)
+                                         : solve(normalEquations(0, frames, factors, nominal, false), h, all_steps);
   if (!solution) return result;
   result.states.resize(static_cast<size_t>(frames));
   for (int i = 0; i < frames; ++i) {

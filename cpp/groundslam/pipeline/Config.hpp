@@ -77,6 +77,16 @@ struct OdometryChecks {
   /// area, and over a gap a rocking mount's tilt differs between the frames (1 degree at 25 cm: 4 mm).
   double low_overlap_sigma_m = 0.005;
   double low_overlap_sigma_rad = 0.005;
+  /// A turn moves the ground by the camera's tilt error too: a tilt off by delta shifts every ground point by
+  /// height * delta, and a turn by theta turns that shift into a translation error of 2 sin(theta / 2) * height *
+  /// delta. One pair of views does not show the absolute tilt, so with delta = outdoor.tilt_prior_deg (the mount's
+  /// rocking bound), a frame whose turn makes this more than sharp_turn_lever_m says `sharp_turn`, not `ok`
+  /// (at 25 cm, 1 degree and 5 mm: turns of more than 70 degrees between frames). 0: off.
+  double sharp_turn_lever_m = 0.005;
+  /// A motion spanning at least this many frames' travel (its length, or its time, over the last good motion's)
+  /// crossed frames that were dropped, with or without a trace in the timestamps: the frame says `gap`, not `ok`
+  /// (the mount rocked over the gap, and one pair of views does not show how far). 0: off.
+  double gap_min_steps = 2.0;
 };
 
 /// Outdoors and on real robots: features that stay still in the image, and the camera's tilt and height per
@@ -211,6 +221,8 @@ void visitConfigFields(Config_& c, Visitor&& v) {
   v("odometry", "low_overlap_max_match_share", c.odometry_checks.low_overlap_max_match_share, Range{0.0, 1.0});
   v("odometry", "low_overlap_sigma_m", c.odometry_checks.low_overlap_sigma_m, kNonNegative);
   v("odometry", "low_overlap_sigma_rad", c.odometry_checks.low_overlap_sigma_rad, kNonNegative);
+  v("odometry", "sharp_turn_lever_m", c.odometry_checks.sharp_turn_lever_m, kNonNegative);
+  v("odometry", "gap_min_steps", c.odometry_checks.gap_min_steps, kNonNegative);
   v("odometry", "fallback_sigma_m", c.fallback.sigma_m, kPositive);
   v("odometry", "fallback_sigma_rad", c.fallback.sigma_rad, kPositive);
   v("loop_closure", "enabled", c.loop_closure.enabled, Range{});

@@ -141,6 +141,14 @@ class Slam {
   /// False when the motion's translation is far from the last good motion's, scaled to the time between frames
   /// (config odometry.max_velocity_change_*).
   bool plausibleMotion(const Pose2& T_prev_curr, double previous_time, double current_time) const;
+  /// How many frames' worth of travel a motion spans: its time over the last good motion's and its length over
+  /// the last good one's, whichever is more (at least 1). Frames dropped without a trace in the timestamps still
+  /// show in the length; the mount rocked over all of them.
+  double rockingSteps(const OdometryEdge& odometry, double previous_time, double current_time) const;
+  /// True when the turn makes the tilt's lever arm longer than odometry.sharp_turn_lever_m (OdometryChecks).
+  bool sharpTurn(const Pose2& T_prev_curr) const;
+  /// True when a motion spans at least odometry.gap_min_steps frames' travel (rockingSteps).
+  bool spansGap(double steps) const;
   void addToGraph(const OdometryEdge& odometry);
   /// What of the current frame goes to loop closure and the map: its features outside artifact cells and
   /// not among this frame's still matches. The previous frame's still features leave its pending place too.
@@ -181,6 +189,8 @@ class Slam {
   int mount_estimates_ = 0;
   std::vector<FrameMountFactor> mount_factors_;  ///< every mount estimate's factor (graph frames)
   std::vector<MountState> used_mounts_;        ///< per graph frame: the mount its points were projected with
+  /// Per graph frame: how many frames' worth of rocking lie since the previous one (smoothMounts' steps).
+  std::vector<double> rocking_steps_;
   std::vector<MountState> final_mounts_;       ///< per graph frame, from smoothMounts at finish()
   std::optional<MountRocking> mount_rocking_;
 
