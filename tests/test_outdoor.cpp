@@ -595,7 +595,7 @@ TEST(OutdoorSequence, MountSolvedOverTheWholeRunHalvesTheRockingError) {
 
 TEST(OutdoorSequence, TrackedThroughArtifactsSharpTurnsAndDroppedFrames) {
   // Shadow, lens dirt, glare, a bumper in view, 90-degree turns and dropped frames. Measured: 120 frames ok,
-  // 6 sharp turns and 3 gaps; none of the ok frames is off (before the sharp_turn status, a quarter turn 5.5 mm
+  // 6 sharp turns and the drops' frames gap; none of the ok frames is off (before the sharp_turn status, a quarter turn 5.5 mm
   // off was ok: the rocking mount's 2 mm footprint shift adds up instead of cancelling), ATE 3.1 mm.
   const OutdoorRun run = runOdometry(rockingSequence(true), 0.03, true);
   EXPECT_GE(run.ok_frames + run.sharp_turns + run.gaps, 120);

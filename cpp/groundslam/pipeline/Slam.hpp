@@ -142,7 +142,7 @@ class Slam {
   /// (config odometry.max_velocity_change_*).
   bool plausibleMotion(const Pose2& T_prev_curr, double previous_time, double current_time) const;
   /// How many frames' worth of travel a motion spans: its time over the last good motion's and its length over
-  /// the last good one's, whichever is more (at least 1). Frames dropped without a trace in the timestamps still
+  /// the median of the last good ones', whichever is more (at least 1). Frames dropped without a trace in the timestamps still
   /// show in the length; the mount rocked over all of them.
   double rockingSteps(const OdometryEdge& odometry, double previous_time, double current_time) const;
   /// True when the turn makes the tilt's lever arm longer than odometry.sharp_turn_lever_m (OdometryChecks).
@@ -204,6 +204,8 @@ class Slam {
   std::optional<OdometryEdge> last_good_odometry_;
   /// The time between the two frames of last_good_odometry_; 0 after a failed frame (no speed to judge by).
   double last_good_odometry_seconds_ = 0.0;
+  static constexpr size_t kRecentLengths = 5;
+  std::deque<double> recent_lengths_m_;  ///< the last kRecentLengths good motions' lengths (rockingSteps)
   std::vector<double> timestamps_;
   std::vector<bool> measured_;  ///< per frame: its pose came from a measurement, not a fallback
   std::vector<LoopCandidate> candidates_;
