@@ -530,8 +530,7 @@ OutdoorRun runOdometry(const sim::SimulationSettings& s, double drop_probability
     run.ok_frames += previous && r.status == FrameStatus::ok ? 1 : 0;
     run.sharp_turns += r.status == FrameStatus::sharp_turn ? 1 : 0;
     run.gaps += r.status == FrameStatus::gap ? 1 : 0;
-    const bool measured = r.status == FrameStatus::ok || r.status == FrameStatus::sharp_turn || r.status == FrameStatus::gap;
-    if (previous && measured) {
+    if (previous && measuredByOdometry(r.status)) {
       ok_motions.push_back({r.index, r.odometry, between(simulator.groundTruth()[size_t(*previous)], simulator.groundTruth()[size_t(i)]),
                             r.status});
     }

@@ -84,9 +84,9 @@ struct OdometryChecks {
   /// (at 25 cm, 1 degree and 5 mm: turns of more than 70 degrees between frames). 0: off.
   double sharp_turn_lever_m = 0.005;
   /// A motion spanning at least this many frames' travel (its length over the last good motions' median length,
-  /// or its time over the last good motion's)
-  /// crossed frames that were dropped, with or without a trace in the timestamps: the frame says `gap`, not `ok`
-  /// (the mount rocked over the gap, and one pair of views does not show how far). 0: off.
+  /// or its time over the last good motion's) crossed frames that were dropped, with or without a trace in the
+  /// timestamps: the frame says `gap`, not `ok` (the mount rocked over the gap, and one pair of views does not
+  /// show how far). 0: off.
   double gap_min_steps = 2.0;
 };
 

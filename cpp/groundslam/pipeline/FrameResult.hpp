@@ -32,6 +32,11 @@ enum class FrameStatus {
   relocalized,  ///< global localization found the pose again (tracking resumes)
 };
 
+/// Odometry measured the frame's motion with its first matching (`sharp_turn` and `gap` only say it is less certain).
+inline bool measuredByOdometry(FrameStatus status) {
+  return status == FrameStatus::ok || status == FrameStatus::sharp_turn || status == FrameStatus::gap;
+}
+
 struct FrameResult {
   int index = 0;
   double timestamp = 0.0;

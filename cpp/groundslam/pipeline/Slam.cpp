@@ -1,11 +1,10 @@
 #include "groundslam/pipeline/Slam.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
-#include <cstddef>
 #include <limits>
 #include <stdexcept>
-#include <vector>
 
 #include "groundslam/pipeline/StageTimer.hpp"
 
@@ -28,11 +27,6 @@ std::pair<std::vector<Eigen::Vector2d>, std::vector<Eigen::Vector2d>> matchedPoi
 /// motion: a standard deviation of 100 m and 100 rad.
 GraphEdge informationFreeEdge(int from, int to, const Pose2& T_from_to) {
   return {from, to, T_from_to, Eigen::Vector3d(1e-4, 1e-4, 1e-4).asDiagonal(), false};
-}
-
-/// Odometry measured the motion with the first matching (sharp turns and gaps only say so).
-bool tracked(FrameStatus status) {
-  return status == FrameStatus::ok || status == FrameStatus::sharp_turn || status == FrameStatus::gap;
 }
 
 /// diag(sigma_m^2, sigma_m^2, sigma_rad^2): uncertainty added to a motion's covariance.
@@ -143,7 +137,7 @@ FrameResult Slam::process(PreparedFrame prepared) {
   optimiseIfDue(result, false);
 
   result.T_world_robot = graph_.poses().back();
-  if (lost_ || !tracked(result.status)) recent_.clear();
+  if (lost_ || !measuredByOdometry(result.status)) recent_.clear();
   if (!lost_ && config_.outdoor.estimate_mount) {
     recent_.push_back(current);
     while (recent_.size() > 30) recent_.pop_front();
@@ -467,9 +461,11 @@ double Slam::rockingSteps(const OdometryEdge& odometry, double previous_time, do
   // gone wrong; measured: a 6 mm motion amid 10 mm ones on the standard carpet lawnmower) does not make the
   // next one a gap. Only against a length long enough to measure (a robot standing still has no speed).
   if (recent_lengths_m_.empty()) return steps;
-  std::vector<double> lengths(recent_lengths_m_.begin(), recent_lengths_m_.end());
-  std::nth_element(lengths.begin(), lengths.begin() + static_cast<std::ptrdiff_t>(lengths.size() / 2), lengths.end());
-  const double usual_m = lengths[lengths.size() / 2];
+  std::array<double, kRecentLengths> lengths{};  // no allocation per frame
+  const auto end = std::copy(recent_lengths_m_.begin(), recent_lengths_m_.end(), lengths.begin());
+  const auto middle = lengths.begin() + (end - lengths.begin()) / 2;
+  std::nth_element(lengths.begin(), middle, end);
+  const double usual_m = *middle;
   if (usual_m > 4.0 * ground_sample_m_) steps = std::max(steps, odometry.T_prev_curr.translation().norm() / usual_m);
   return steps;
 }

@@ -142,8 +142,8 @@ class Slam {
   /// (config odometry.max_velocity_change_*).
   bool plausibleMotion(const Pose2& T_prev_curr, double previous_time, double current_time) const;
   /// How many frames' worth of travel a motion spans: its time over the last good motion's and its length over
-  /// the median of the last good ones', whichever is more (at least 1). Frames dropped without a trace in the timestamps still
-  /// show in the length; the mount rocked over all of them.
+  /// the median of the last good ones', whichever is more (at least 1; a failed motion: infinite). Frames dropped
+  /// without a trace in the timestamps still show in the length; the mount rocked over all of them.
   double rockingSteps(const OdometryEdge& odometry, double previous_time, double current_time) const;
   /// True when the turn makes the tilt's lever arm longer than odometry.sharp_turn_lever_m (OdometryChecks).
   bool sharpTurn(const Pose2& T_prev_curr) const;
