@@ -152,6 +152,7 @@ struct RansacResult {
   std::vector<int> inliers;  ///< of the best hypothesis
   Pose2 best;
   int rival_support = 0;     ///< the best hypothesis far from `best`
+  std::vector<Pose2> rivals;  ///< distinct strong hypotheses far from `best`, strongest first
 };
 
 /// True when two transforms are different explanations, not the same one seen through noise.
@@ -201,12 +202,17 @@ RansacResult ransac(const std::vector<Eigen::Vector2d>& target, const std::vecto
   }
   // Strongest first: once a hypothesis's whole support cannot beat the rival found, none after it can.
   std::sort(tried.begin(), tried.end(), [](const Hypothesis& a, const Hypothesis& b) { return a.support > b.support; });
+  // The list of rivals goes on while they are strong (a third of the best's support) and distinct; the
+  // rival support is the same as if it stopped at the first that cannot beat the one found.
+  const int strong = static_cast<int>(result.inliers.size()) / 3;
   for (const Hypothesis& h : tried) {
-    if (h.support <= result.rival_support) break;
+    const bool listing = result.rivals.size() < RigidEstimate::kMaxRivals && h.support >= strong;
+    if (h.support <= result.rival_support && !listing) break;
     if (!farApart(h.T, result.best, settings)) continue;
-    result.rival_support = std::max(result.rival_support, settings.rival_min_motion_m > 0.0
-                                                              ? supportOf(h.T, target, source, thr, settings.rival_min_motion_m)
-                                                              : h.support);
+    const int support = settings.rival_min_motion_m > 0.0 ? supportOf(h.T, target, source, thr, settings.rival_min_motion_m) : h.support;
+    result.rival_support = std::max(result.rival_support, support);
+    const bool distinct = std::none_of(result.rivals.begin(), result.rivals.end(), [&](const Pose2& r) { return !farApart(h.T, r, settings); });
+    if (listing && distinct && support >= strong) result.rivals.push_back(h.T);
   }
   return result;
 }
@@ -256,6 +262,7 @@ RigidEstimate fitRigidTransform(const std::vector<Eigen::Vector2d>& target, cons
   std::vector<int> inliers = consensus.inliers;
   estimate.inliers = static_cast<int>(inliers.size());
   estimate.rival_inliers = consensus.rival_support;
+  estimate.rivals = consensus.rivals;
   if (inliers.size() < min_inliers) {
     estimate.status = FitStatus::too_few_inliers;
     return estimate;
@@ -267,6 +274,7 @@ RigidEstimate fitRigidTransform(const std::vector<Eigen::Vector2d>& target, cons
   // Robust refinement over every match near the consensus, starting from its least-squares fit.
   RigidEstimate refined = refineRigidTransform(target, source, leastSquaresFit(target, source, inliers), settings);
   refined.rival_inliers = estimate.rival_inliers;
+  refined.rivals = estimate.rivals;
   return refined;
 }
 

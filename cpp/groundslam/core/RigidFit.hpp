@@ -56,6 +56,10 @@ struct RigidEstimate {
   /// Support of the best RANSAC hypothesis far from the chosen one (> 1 cm or > 3 degrees away); only with
   /// measure_ambiguity. A repetitive floor (tiles) fits several offsets almost equally well.
   int rival_inliers = 0;
+  /// The strongest RANSAC hypotheses far from the chosen one and from each other (strongest first, at most
+  /// kMaxRivals; only with measure_ambiguity): the other repetitions a caller may check by other means.
+  std::vector<Pose2> rivals;
+  static constexpr size_t kMaxRivals = 3;
   bool ok() const { return status == FitStatus::ok; }
   /// rival_inliers / inliers: near 1 when another transform explains the matches as well.
   double ambiguity() const { return inliers > 0 ? static_cast<double>(rival_inliers) / inliers : 1.0; }

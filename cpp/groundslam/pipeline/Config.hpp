@@ -88,6 +88,22 @@ struct OdometryChecks {
   /// timestamps: the frame says `gap`, not `ok` (the mount rocked over the gap, and one pair of views does not
   /// show how far). 0: off.
   double gap_min_steps = 2.0;
+  /// A fit refused for a rival transform (max_ambiguity) or for a motion unlike the robot's (a repeated floor:
+  /// the true motion and its repetitions explain the matches alike) is decided by the robot's own motion
+  /// (core/MotionPrior.hpp). Its usual step (the mean of the last good ones since the last sharp turn) once,
+  /// whatever the turn (a turn on the spot), or k = 2 .. repetition_max_steps of them (frames dropped without a
+  /// trace; k fixed when the timestamps show the gap) where k usual turns make the candidate's turn within
+  /// repetition_turn_deg. A candidate's doubts: its distance to the nearest prediction over repetition_sigma_m +
+  /// repetition_sigma_fraction * k * the step's length + the tilt's lever arm at its turn (see sharp_turn_lever_m).
+  /// Candidates: the fit, RANSAC's rival repetitions and the fits to the matches near each prediction. The
+  /// nearest is believed when at most repetition_max_doubts off with every other at least repetition_margin
+  /// times as far (and that many doubts) off; a fit without rivals only where its turn fixes k. 0 steps: off.
+  int repetition_max_steps = 8;
+  double repetition_turn_deg = 1.0;
+  double repetition_sigma_m = 0.004;
+  double repetition_sigma_fraction = 0.1;
+  double repetition_max_doubts = 2.0;
+  double repetition_margin = 2.5;
 };
 
 /// Outdoors and on real robots: features that stay still in the image, and the camera's tilt and height per
@@ -224,6 +240,12 @@ void visitConfigFields(Config_& c, Visitor&& v) {
   v("odometry", "low_overlap_sigma_rad", c.odometry_checks.low_overlap_sigma_rad, kNonNegative);
   v("odometry", "sharp_turn_lever_m", c.odometry_checks.sharp_turn_lever_m, kNonNegative);
   v("odometry", "gap_min_steps", c.odometry_checks.gap_min_steps, kNonNegative);
+  v("odometry", "repetition_max_steps", c.odometry_checks.repetition_max_steps, Range{0, 1000});
+  v("odometry", "repetition_turn_deg", c.odometry_checks.repetition_turn_deg, kNonNegative);
+  v("odometry", "repetition_sigma_m", c.odometry_checks.repetition_sigma_m, kPositive);
+  v("odometry", "repetition_sigma_fraction", c.odometry_checks.repetition_sigma_fraction, kNonNegative);
+  v("odometry", "repetition_max_doubts", c.odometry_checks.repetition_max_doubts, kPositive);
+  v("odometry", "repetition_margin", c.odometry_checks.repetition_margin, Range{1.0, 1000.0});
   v("odometry", "fallback_sigma_m", c.fallback.sigma_m, kPositive);
   v("odometry", "fallback_sigma_rad", c.fallback.sigma_rad, kPositive);
   v("loop_closure", "enabled", c.loop_closure.enabled, Range{});

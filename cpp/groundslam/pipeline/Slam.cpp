@@ -91,9 +91,17 @@ FrameResult Slam::process(PreparedFrame prepared) {
     rocking_steps_[static_cast<size_t>(frame)] = spansGap(steps) ? steps : 1.0;
     if (!odometry.fallback && !odometry.low_overlap) {
       last_good_odometry_ = odometry;
-      last_good_odometry_seconds_ = current.timestamp - previous_->timestamp;
-      recent_lengths_m_.push_back(odometry.T_prev_curr.translation().norm());
-      if (recent_lengths_m_.size() > kRecentLengths) recent_lengths_m_.pop_front();
+      if (spansGap(steps)) {
+        // Over a gap the robot's step is the motion shared among the steps, and a step takes as long as before.
+        const Pose2& T = odometry.T_prev_curr;
+        last_good_odometry_->T_prev_curr = Pose2(T.x / steps, T.y / steps, T.theta / steps);
+      } else {
+        last_good_odometry_seconds_ = current.timestamp - previous_->timestamp;
+      }
+      recent_steps_.push_back(last_good_odometry_->T_prev_curr);
+      if (recent_steps_.size() > kRecentSteps) recent_steps_.pop_front();
+      // A turn on the spot changes the direction of the robot's steps as its camera sees them.
+      steps_since_turn_ = sharpTurn(odometry.T_prev_curr) ? 0 : steps_since_turn_ + 1;
     } else {
       // The speed is unknown again (a low-overlap motion usually spans a gap): the next motion is not judged by it.
       last_good_odometry_seconds_ = 0.0;
@@ -392,6 +400,14 @@ OdometryEdge Slam::estimateOdometry(const Keyframe& previous, const Keyframe& cu
   if (fit.ok() && !decisive && !plausibleMotion(fit.T_target_source, previous.timestamp, current.timestamp)) {
     fit.status = FitStatus::implausible_motion;
   }
+  // Not in the paper: refused for its rivals or its speed on a repeated floor, the fit and its rivals are
+  // judged by where the robot was going.
+  if (fit.status == FitStatus::ambiguous || fit.status == FitStatus::implausible_motion) {
+    if (auto chosen = fitByMotion(fit, used, previous, current)) {
+      fit = std::move(*chosen);
+      result.inliers = fit.inliers;
+    }
+  }
 
   // Too little evidence (not a motion refused for its rivals or its speed) where the overlap fell: a second look.
   const bool too_little = fit.status == FitStatus::too_few_matches || fit.status == FitStatus::too_few_inliers ||
@@ -429,6 +445,79 @@ std::optional<std::pair<RigidEstimate, std::vector<Match>>> Slam::fitLowOverlap(
   return std::make_pair(fit, std::move(matches));
 }
 
+std::optional<RigidEstimate> Slam::fitByMotion(const RigidEstimate& fit, const std::vector<Match>& used,
+                                               const Keyframe& previous, const Keyframe& current) const {
+  const OdometryChecks& checks = config_.odometry_checks;
+  if (checks.repetition_max_steps <= 0 || !last_good_odometry_) return std::nullopt;
+  int first_steps = 1, last_steps = checks.repetition_max_steps;
+  if (last_good_odometry_seconds_ > 0.0 && current.timestamp > previous.timestamp) {
+    // Timestamps that show how many frames are missing fix the steps (one for consecutive frames).
+    const double ratio = (current.timestamp - previous.timestamp) / last_good_odometry_seconds_;
+    if (ratio < 0.5 || ratio > 1.5) first_steps = last_steps = std::max(1, static_cast<int>(std::lround(ratio)));
+  }
+  MotionPriorSettings settings;
+  settings.max_steps = checks.repetition_max_steps;
+  settings.turn_doubt_rad = checks.repetition_turn_deg * M_PI / 180.0;
+  settings.sigma_m = checks.repetition_sigma_m;
+  settings.sigma_fraction = checks.repetition_sigma_fraction;
+  settings.lever_m = calibrated_mount_.translation().z() * config_.outdoor.tilt_prior_deg * M_PI / 180.0;
+  settings.max_doubts = checks.repetition_max_doubts;
+  settings.margin = checks.repetition_margin;
+  const MotionPrior prior(usualStep(), first_steps, last_steps, settings);
+
+  // The candidates: the fit, its rival repetitions, and what the matches say near each motion the robot can
+  // have made (the true motion may have too little support to be found among all the matches). Each is refined
+  // on its own matches: compared at its best, not at a RANSAC sample's guess.
+  const auto [previous_points, current_points] = matchedPoints(used, current.features, previous.features);
+  std::vector<RigidEstimate> candidates{fit};
+  const auto add = [&](RigidEstimate estimate) {
+    if (!estimate.ok()) return;
+    for (const RigidEstimate& c : candidates) {
+      if ((c.T_target_source.translation() - estimate.T_target_source.translation()).norm() < 0.005) return;  // the same one
+    }
+    candidates.push_back(std::move(estimate));
+  };
+  for (const Pose2& rival : fit.rivals) add(refineRigidTransform(previous_points, current_points, rival, odometry_fitting_));
+  FitSettings near_settings = odometry_fitting_;
+  near_settings.measure_ambiguity = false;
+  for (const PredictedMotion& predicted : prior.predictions(fit.T_target_source.theta)) {
+    std::vector<Eigen::Vector2d> near_previous, near_current;
+    const double radius = 1.5 * predicted.sigma_m;
+    for (size_t i = 0; i < current_points.size(); ++i) {
+      if ((predicted.T_prev_curr * current_points[i] - previous_points[i]).norm() > radius) continue;
+      near_previous.push_back(previous_points[i]);
+      near_current.push_back(current_points[i]);
+    }
+    add(fitRigidTransform(near_previous, near_current, near_settings));
+  }
+  // Alone, the fit is believed only where the turn shows how many steps the gap spans (one number of steps
+  // turns by its angle besides a single step): driving straight, a repetition is some number of steps on too.
+  if (candidates.size() < 2 && prior.predictions(fit.T_target_source.theta).size() > 2) return std::nullopt;
+  std::vector<Pose2> motions;
+  for (const RigidEstimate& c : candidates) motions.push_back(c.T_target_source);
+  const std::optional<size_t> chosen = prior.choose(motions);
+  if (!chosen) return std::nullopt;
+  // The chosen one's inliers among all the matches, for the covariance and the frame's report.
+  RigidEstimate estimate = refineRigidTransform(previous_points, current_points, motions[*chosen], odometry_fitting_);
+  if (!estimate.ok()) return std::nullopt;
+  return estimate;
+}
+
+Pose2 Slam::usualStep() const {
+  // The mean of the last good steps since the last sharp turn (each is a few millimetres off on a rocking
+  // mount), or the last good one.
+  Pose2 step = last_good_odometry_ ? last_good_odometry_->T_prev_curr : Pose2();
+  const size_t averaged = std::min(recent_steps_.size(), steps_since_turn_);
+  if (averaged == 0) return step;
+  step = Pose2(0.0, 0.0, 0.0);
+  for (auto recent = recent_steps_.end() - static_cast<std::ptrdiff_t>(averaged); recent != recent_steps_.end(); ++recent) {
+    step.x += recent->x / static_cast<double>(averaged);
+    step.y += recent->y / static_cast<double>(averaged);
+    step.theta += recent->theta / static_cast<double>(averaged);
+  }
+  return step;
+}
+
 bool Slam::plausibleMotion(const Pose2& T_prev_curr, double previous_time, double current_time) const {
   if (!last_good_odometry_ || !(last_good_odometry_seconds_ > 0.0) || !(current_time > previous_time)) return true;
   const double scale = (current_time - previous_time) / last_good_odometry_seconds_;
@@ -460,9 +549,10 @@ double Slam::rockingSteps(const OdometryEdge& odometry, double previous_time, do
   // The median length of the last good motions: one of them off by millimetres (an online mount estimate
   // gone wrong; measured: a 6 mm motion amid 10 mm ones on the standard carpet lawnmower) does not make the
   // next one a gap. Only against a length long enough to measure (a robot standing still has no speed).
-  if (recent_lengths_m_.empty()) return steps;
-  std::array<double, kRecentLengths> lengths{};  // no allocation per frame
-  const auto end = std::copy(recent_lengths_m_.begin(), recent_lengths_m_.end(), lengths.begin());
+  if (recent_steps_.empty()) return steps;
+  std::array<double, kRecentSteps> lengths{};  // no allocation per frame
+  const auto end = std::transform(recent_steps_.begin(), recent_steps_.end(), lengths.begin(),
+                                  [](const Pose2& step) { return step.translation().norm(); });
   const auto middle = lengths.begin() + (end - lengths.begin()) / 2;
   std::nth_element(lengths.begin(), middle, end);
   const double usual_m = *middle;

@@ -15,6 +15,7 @@
 #include "groundslam/core/CameraModel.hpp"
 #include "groundslam/core/FeatureExtraction.hpp"
 #include "groundslam/core/Matching.hpp"
+#include "groundslam/core/MotionPrior.hpp"
 #include "groundslam/core/MountEstimation.hpp"
 #include "groundslam/core/MountSmoother.hpp"
 #include "groundslam/core/PoseGraph.hpp"
@@ -111,6 +112,12 @@ class Slam {
   /// Matches split into still ones and the rest; when the rest fit a motion that moves the still ones, that fit.
   std::optional<RigidEstimate> fitWithoutStill(const StillSplit& split, const Keyframe& previous, const Keyframe& current) const;
   /// The second look at a pair whose fit failed: the fit and the matches it used, or nothing.
+  /// A fit refused as ambiguous or implausible, its rival transforms and the fits near the motions the robot
+  /// can have made: the one the robot's motion clearly points to (OdometryChecks::repetition_*), or none.
+  std::optional<RigidEstimate> fitByMotion(const RigidEstimate& fit, const std::vector<Match>& used, const Keyframe& previous,
+                                           const Keyframe& current) const;
+  /// The robot's motion between consecutive frames lately (core/MotionPrior.hpp).
+  Pose2 usualStep() const;
   std::optional<std::pair<RigidEstimate, std::vector<Match>>> fitLowOverlap(const Keyframe& previous, const Keyframe& current) const;
   /// The current frame's roll, pitch and height from the odometry's inliers; its points re-projected and the
   /// odometry fitted again with them. Leaves everything as it was when the estimate fails.
@@ -204,8 +211,9 @@ class Slam {
   std::optional<OdometryEdge> last_good_odometry_;
   /// The time between the two frames of last_good_odometry_; 0 after a failed frame (no speed to judge by).
   double last_good_odometry_seconds_ = 0.0;
-  static constexpr size_t kRecentLengths = 5;
-  std::deque<double> recent_lengths_m_;  ///< the last kRecentLengths good motions' lengths (rockingSteps)
+  static constexpr size_t kRecentSteps = 5;
+  std::deque<Pose2> recent_steps_;  ///< the last kRecentSteps good motions, a gap's shared among its steps
+  size_t steps_since_turn_ = 0;     ///< good motions since the last sharp turn (recent_steps_ before it point elsewhere)
   std::vector<double> timestamps_;
   std::vector<bool> measured_;  ///< per frame: its pose came from a measurement, not a fallback
   std::vector<LoopCandidate> candidates_;

@@ -1,0 +1,54 @@
+#pragma once
+// Not in the paper: where the robot can have gone since the previous frame, from its own recent steps. On a
+// repeated floor the matches support the true motion and its repetitions alike (one tile over); the robot's
+// motion tells them apart: a frame later it has made about one more step, and over frames dropped without a
+// trace about k of them, turning as it was turning.
+
+#include <optional>
+#include <vector>
+
+#include "groundslam/core/Pose2.hpp"
+
+namespace groundslam {
+
+struct MotionPriorSettings {
+  int max_steps = 8;               ///< most steps a gap may span (frames dropped without a trace)
+  double turn_doubt_rad = 1.0 * 0.017453292519943295;  ///< over a gap, k usual steps turn as the motion does within this
+  double sigma_m = 0.004;          ///< doubt of any prediction (a single fit is millimetres off on a rocking mount)
+  double sigma_fraction = 0.1;     ///< and per step, this share of the usual step's length (speed changes)
+  /// The tilt's lever arm, metres per radian of turn chord (height * tilt bound): a turn by theta adds
+  /// 2 |sin(theta / 2)| times this to the doubt.
+  double lever_m = 0.0;
+  double max_doubts = 2.0;  ///< the chosen candidate is at most this many doubts off,
+  double margin = 2.5;      ///< and every other at least this many times as far (and as many doubts) off
+};
+
+/// A predicted motion and its doubt (one standard deviation of its translation, metres).
+struct PredictedMotion {
+  Pose2 T_prev_curr;
+  int steps = 1;
+  double sigma_m = 0.0;
+};
+
+class MotionPrior {
+ public:
+  /// `usual_step`: the robot's motion between consecutive frames lately; steps from first_steps to last_steps
+  /// are considered (both 1 when the timestamps show that no frame is missing; both k when they show a gap of k).
+  MotionPrior(const Pose2& usual_step, int first_steps, int last_steps, const MotionPriorSettings& settings);
+
+  /// The motions the robot can have made if it turned by `theta` in all: one usual step whatever the turn (a turn
+  /// on the spot between the frames), or k steps each turning by theta / k where that is close to the usual turn.
+  std::vector<PredictedMotion> predictions(double theta_rad) const;
+  /// How far a motion is from the nearest prediction with its turn, in doubts; infinity when none applies.
+  double doubtsOff(const Pose2& T_prev_curr) const;
+  /// The index of the nearest candidate when it is at most max_doubts off and every other at least `margin`
+  /// times as far (and `margin` doubts) off; none otherwise.
+  std::optional<size_t> choose(const std::vector<Pose2>& candidates) const;
+
+ private:
+  Pose2 step_;
+  int first_steps_, last_steps_;
+  MotionPriorSettings settings_;
+};
+
+}  // namespace groundslam

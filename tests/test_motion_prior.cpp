@@ -1,0 +1,118 @@
+// The robot's own motion tells a repeated floor's repetitions apart: known candidates, known choices.
+#include <cmath>
+
+#include <gtest/gtest.h>
+
+#include "groundslam/core/MotionPrior.hpp"
+#include "groundslam/core/RigidFit.hpp"
+
+using namespace groundslam;
+
+namespace {
+
+constexpr double kDeg = M_PI / 180.0;
+
+/// k steps of `step`, composed.
+Pose2 steps(const Pose2& step, int k) {
+  Pose2 T;
+  for (int j = 0; j < k; ++j) T = T * step;
+  return T;
+}
+
+}  // namespace
+
+TEST(MotionPrior, KStepsTurnEvenlyAndOneStepKeepsItsTranslationWhateverTheTurn) {
+  const Pose2 step(0.0, -0.01, 1.75 * kDeg);
+  const MotionPrior prior(step, 1, 8, MotionPriorSettings{});
+  // Turned by six steps' worth: one step (a turn on the spot) or exactly six steps.
+  const std::vector<PredictedMotion> turned = prior.predictions(6 * step.theta);
+  ASSERT_EQ(turned.size(), 2u);
+  EXPECT_EQ(turned[0].steps, 1);
+  EXPECT_LT((turned[0].T_prev_curr.translation() - step.translation()).norm(), 1e-12);
+  EXPECT_EQ(turned[1].steps, 6);
+  EXPECT_LT((turned[1].T_prev_curr.translation() - steps(step, 6).translation()).norm(), 1e-12);
+  // Doubt: 4 mm, 10% of a step per step, and the tilt's lever arm (none set here).
+  EXPECT_NEAR(turned[1].sigma_m, 0.004 + 0.1 * 6 * 0.01, 1e-12);
+  // Timestamps that show six missing steps allow those only.
+  EXPECT_EQ(MotionPrior(step, 6, 6, MotionPriorSettings{}).predictions(6 * step.theta).size(), 1u);
+}
+
+TEST(MotionPrior, AGapWhileTurningIsToldFromItsRepetitions) {
+  // Frames dropped while the robot turned 1.75 degrees per 1 cm step: six steps later it is 6 cm on, turned
+  // by 10.5 degrees. The floor repeats every 4 cm, so RANSAC also offers the truth shifted by a tile ahead and
+  // to either side, each with the same turn. Only six steps turn by 10.5 degrees, and only one candidate lies
+  // where six steps go.
+  const Pose2 step(0.0, -0.01, 1.75 * kDeg);
+  const Pose2 truth = steps(step, 6) * Pose2(0.002, 0.003, 0.0);  // the fit a few millimetres off
+  std::vector<Pose2> candidates;
+  for (const Eigen::Vector2d& shift : std::vector<Eigen::Vector2d>{Eigen::Vector2d(0.04, 0.0), Eigen::Vector2d(-0.04, 0.0), Eigen::Vector2d(0.0, -0.04), Eigen::Vector2d(0.0, 0.0)}) {
+    candidates.emplace_back(truth.x + shift.x(), truth.y + shift.y(), truth.theta);
+  }
+  const MotionPrior prior(step, 1, 8, MotionPriorSettings{});
+  ASSERT_TRUE(prior.choose(candidates).has_value());
+  EXPECT_EQ(*prior.choose(candidates), 3u);
+  EXPECT_LT(prior.doubtsOff(candidates[3]), 0.5);
+  for (size_t i = 0; i < 3; ++i) EXPECT_GT(prior.doubtsOff(candidates[i]), 2.5) << i;
+  // The repetition a tile back, 2 cm on, could be a single step with a sudden 10-degree turn: with it among
+  // the candidates, nothing is chosen.
+  candidates.emplace_back(truth.x, truth.y + 0.04, truth.theta);
+  EXPECT_FALSE(prior.choose(candidates).has_value());
+}
+
+TEST(MotionPrior, AGapOnAStraightLaneStaysAmbiguous) {
+  // Driving straight, 6 cm on and the repetition 4 cm behind it (2 cm on) are both a whole number of steps:
+  // nothing tells them apart, and nothing is chosen. Told by the timestamps that six steps passed, the 6 cm is.
+  const Pose2 step(0.0, -0.01, 0.0);
+  const std::vector<Pose2> candidates{Pose2(0.0, -0.06, 0.0), Pose2(0.0, -0.02, 0.0)};
+  EXPECT_FALSE(MotionPrior(step, 1, 8, MotionPriorSettings{}).choose(candidates).has_value());
+  const auto timed = MotionPrior(step, 6, 6, MotionPriorSettings{}).choose(candidates);
+  ASSERT_TRUE(timed.has_value());
+  EXPECT_EQ(*timed, 0u);
+}
+
+TEST(MotionPrior, ATurnOnTheSpotKeepsTheStepAndNothingFarIsChosen) {
+  // A quarter turn between two frames: the robot still made its 1 cm step. The repetition one tile over is
+  // refused even with the tilt's lever arm in the doubt (25 cm x 1 degree: 6 mm at a quarter turn).
+  const Pose2 step(0.01, 0.0, 0.0);
+  MotionPriorSettings settings;
+  settings.lever_m = 0.25 * kDeg;
+  const MotionPrior prior(step, 1, 8, settings);
+  const std::vector<Pose2> candidates{Pose2(0.05, 0.0, 90 * kDeg), Pose2(0.012, 0.003, 90 * kDeg)};
+  ASSERT_TRUE(prior.choose(candidates).has_value());
+  EXPECT_EQ(*prior.choose(candidates), 1u);
+  // Only repetitions, none where the robot went: none chosen.
+  EXPECT_FALSE(prior.choose({Pose2(0.05, 0.0, 90 * kDeg), Pose2(-0.03, 0.0, 90 * kDeg)}).has_value());
+}
+
+TEST(RigidFit, RivalsAreTheOtherRepetitionsStrongestFirst) {
+  // Points on three 4 cm tiles, each matched to its copy on every tile: the truth and its repetitions one and
+  // two tiles over (either way) explain a third of the matches each.
+  const Pose2 truth(0.003, 0.001, 0.0);
+  std::vector<Eigen::Vector2d> target, source;
+  for (int i = 0; i < 40; ++i) {
+    const Eigen::Vector2d in_tile(0.001 * (i % 7) * 5.0 / 7.0 * 4.0, 0.001 * (i * 13 % 37));
+    for (int tile = 0; tile < 3; ++tile) {
+      for (int other = 0; other < 3; ++other) {
+        source.push_back(in_tile + Eigen::Vector2d(0.04 * tile, 0.0));
+        target.push_back(truth * (in_tile + Eigen::Vector2d(0.04 * other, 0.0)));
+      }
+    }
+  }
+  FitSettings settings;
+  settings.measure_ambiguity = true;
+  settings.rival_max_rotation_rad = 1.0 * kDeg;
+  settings.ransac_iterations = 2000;
+  const RigidEstimate fit = fitRigidTransform(target, source, settings);
+  ASSERT_TRUE(fit.ok());
+  ASSERT_GE(fit.rivals.size(), 2u);
+  EXPECT_LE(fit.rivals.size(), RigidEstimate::kMaxRivals);
+  for (size_t i = 0; i < fit.rivals.size(); ++i) {
+    // Each rival is the fit shifted by a whole number of tiles along x.
+    const Eigen::Vector2d shift = fit.rivals[i].translation() - fit.T_target_source.translation();
+    const double tiles = shift.x() / 0.04;
+    EXPECT_NEAR(tiles, std::round(tiles), 0.05) << i;
+    EXPECT_GE(std::abs(std::round(tiles)), 1.0) << i;
+    EXPECT_NEAR(shift.y(), 0.0, 0.001) << i;
+    for (size_t j = 0; j < i; ++j) EXPECT_GT((fit.rivals[i].translation() - fit.rivals[j].translation()).norm(), 0.01);
+  }
+}
