@@ -11,6 +11,7 @@
 
 #include "groundslam/core/FeatureExtraction.hpp"
 #include "groundslam/core/Matching.hpp"
+#include "groundslam/core/MotionPrior.hpp"
 #include "groundslam/core/NearestDescriptors.hpp"
 #include "groundslam/core/MountEstimation.hpp"
 #include "groundslam/core/MountSmoother.hpp"
@@ -193,10 +194,26 @@ void BM_RobustFit(benchmark::State& state) {
     target.push_back(a.points[static_cast<size_t>(m.train)]);
     source.push_back(b.points[static_cast<size_t>(m.query)]);
   }
-  for (auto _ : state) benchmark::DoNotOptimize(fitRigidTransform(target, source, FitSettings{}));
+  // Arg 1: as odometry fits, every RANSAC hypothesis tried to measure the rivals and list the repetitions.
+  FitSettings settings;
+  settings.measure_ambiguity = state.range(0) == 1;
+  settings.rival_max_rotation_rad = 1.0 * M_PI / 180.0;
+  for (auto _ : state) benchmark::DoNotOptimize(fitRigidTransform(target, source, settings));
   state.counters["matches"] = static_cast<double>(matches.size());
 }
-BENCHMARK(BM_RobustFit)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_RobustFit)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
+
+void BM_MotionPriorChoice(benchmark::State& state) {
+  // A refused fit on a repeated floor: the fit and three repetitions, judged against eight steps' predictions.
+  const Pose2 step(0.0, -0.01, 1.75 * M_PI / 180.0);
+  const MotionPrior prior(step, 1, 8, MotionPriorSettings{});
+  Pose2 truth;
+  for (int k = 0; k < 6; ++k) truth = truth * step;
+  const std::vector<Pose2> candidates{Pose2(truth.x + 0.04, truth.y, truth.theta), Pose2(truth.x - 0.04, truth.y, truth.theta),
+                                      Pose2(truth.x, truth.y - 0.04, truth.theta), truth};
+  for (auto _ : state) benchmark::DoNotOptimize(prior.choose(candidates));
+}
+BENCHMARK(BM_MotionPriorChoice)->Unit(benchmark::kMicrosecond);
 
 void BM_LoopVerificationMatching(benchmark::State& state) {
   // A loop candidate's guided matching within the default drift window with no drift path:

@@ -21,31 +21,43 @@ Pose2 steps(const Pose2& step, int k) {
 
 }  // namespace
 
-TEST(MotionPrior, KStepsTurnEvenlyAndOneStepKeepsItsTranslationWhateverTheTurn) {
+TEST(MotionPrior, KStepsTurnEvenlyAndOneStepTurnsAsUsualOrOnTheSpot) {
   const Pose2 step(0.0, -0.01, 1.75 * kDeg);
   const MotionPrior prior(step, 1, 8, MotionPriorSettings{});
-  // Turned by six steps' worth: one step (a turn on the spot) or exactly six steps.
+  // Turned by six steps' worth (10.5 degrees): six steps, each turning as the usual one. A single step would
+  // have to turn 8.75 degrees more than usual: more likely a gap.
   const std::vector<PredictedMotion> turned = prior.predictions(6 * step.theta);
-  ASSERT_EQ(turned.size(), 2u);
-  EXPECT_EQ(turned[0].steps, 1);
-  EXPECT_LT((turned[0].T_prev_curr.translation() - step.translation()).norm(), 1e-12);
-  EXPECT_EQ(turned[1].steps, 6);
-  EXPECT_LT((turned[1].T_prev_curr.translation() - steps(step, 6).translation()).norm(), 1e-12);
-  // Doubt: 4 mm, 10% of a step per step, and the tilt's lever arm (none set here).
-  EXPECT_NEAR(turned[1].sigma_m, 0.004 + 0.1 * 6 * 0.01, 1e-12);
+  ASSERT_EQ(turned.size(), 1u);
+  EXPECT_EQ(turned[0].steps, 6);
+  EXPECT_LT((turned[0].T_prev_curr.translation() - steps(step, 6).translation()).norm(), 1e-12);
+  // Doubt: 4 mm, 20% of a step per step, and the tilt's lever arm (none set here).
+  EXPECT_NEAR(turned[0].sigma_m, 0.004 + 0.2 * 6 * 0.01, 1e-12);
+  // A usual turn: one step (two steps would turn twice as much).
+  const std::vector<PredictedMotion> usual = prior.predictions(step.theta - 2.0 * kDeg);
+  ASSERT_EQ(usual.size(), 1u);
+  EXPECT_EQ(usual[0].steps, 1);
+  // A quarter turn on the spot keeps one step's translation.
+  const std::vector<PredictedMotion> spun = prior.predictions(90.0 * kDeg);
+  ASSERT_EQ(spun.size(), 1u);
+  EXPECT_EQ(spun[0].steps, 1);
+  EXPECT_LT((spun[0].T_prev_curr.translation() - step.translation()).norm(), 1e-12);
+  // A sudden 30-degree turn is neither: nothing predicts it.
+  EXPECT_TRUE(prior.predictions(30.0 * kDeg).empty());
   // Timestamps that show six missing steps allow those only.
+  EXPECT_TRUE(MotionPrior(step, 6, 6, MotionPriorSettings{}).predictions(step.theta).empty());
   EXPECT_EQ(MotionPrior(step, 6, 6, MotionPriorSettings{}).predictions(6 * step.theta).size(), 1u);
 }
 
 TEST(MotionPrior, AGapWhileTurningIsToldFromItsRepetitions) {
-  // Frames dropped while the robot turned 1.75 degrees per 1 cm step: six steps later it is 6 cm on, turned
-  // by 10.5 degrees. The floor repeats every 4 cm, so RANSAC also offers the truth shifted by a tile ahead and
-  // to either side, each with the same turn. Only six steps turn by 10.5 degrees, and only one candidate lies
-  // where six steps go.
-  const Pose2 step(0.0, -0.01, 1.75 * kDeg);
-  const Pose2 truth = steps(step, 6) * Pose2(0.002, 0.003, 0.0);  // the fit a few millimetres off
+  // Frames dropped while the robot turned 2 degrees per 1 cm step: four steps later it is 4 cm on, turned by
+  // 8 degrees. The floor repeats every 4 cm, so RANSAC also offers the truth shifted by a tile ahead, behind
+  // and to either side, each with the same turn. Only four steps turn by 8 degrees (three or five turn 2
+  // degrees less or more), and only one candidate lies where four steps go.
+  const Pose2 step(0.0, -0.01, 2.0 * kDeg);
+  const Pose2 truth = steps(step, 4) * Pose2(0.002, 0.003, 0.0);  // the fit a few millimetres off
   std::vector<Pose2> candidates;
-  for (const Eigen::Vector2d& shift : std::vector<Eigen::Vector2d>{Eigen::Vector2d(0.04, 0.0), Eigen::Vector2d(-0.04, 0.0), Eigen::Vector2d(0.0, -0.04), Eigen::Vector2d(0.0, 0.0)}) {
+  for (const Eigen::Vector2d& shift : std::vector<Eigen::Vector2d>{Eigen::Vector2d(0.04, 0.0), Eigen::Vector2d(-0.04, 0.0),
+                                                                   Eigen::Vector2d(0.0, -0.04), Eigen::Vector2d(0.0, 0.0)}) {
     candidates.emplace_back(truth.x + shift.x(), truth.y + shift.y(), truth.theta);
   }
   const MotionPrior prior(step, 1, 8, MotionPriorSettings{});
@@ -53,10 +65,13 @@ TEST(MotionPrior, AGapWhileTurningIsToldFromItsRepetitions) {
   EXPECT_EQ(*prior.choose(candidates), 3u);
   EXPECT_LT(prior.doubtsOff(candidates[3]), 0.5);
   for (size_t i = 0; i < 3; ++i) EXPECT_GT(prior.doubtsOff(candidates[i]), 2.5) << i;
-  // The repetition a tile back, 2 cm on, could be a single step with a sudden 10-degree turn: with it among
-  // the candidates, nothing is chosen.
-  candidates.emplace_back(truth.x, truth.y + 0.04, truth.theta);
-  EXPECT_FALSE(prior.choose(candidates).has_value());
+  // The repetition a tile behind, where the robot started, would be a single step with a sudden 6-degree turn
+  // (not predicted) or four steps 4 cm short of where they go.
+  EXPECT_GT(prior.doubtsOff(Pose2(truth.x, truth.y + 0.04, truth.theta)), 2.5);
+  // Six steps on, the doubt is 1.6 cm (20% of six steps and 4 mm): a 3.5 cm tile to the side is too close to
+  // tell, and nothing is chosen.
+  const Pose2 far = steps(step, 6);
+  EXPECT_FALSE(prior.choose({far, Pose2(far.x + 0.035, far.y, far.theta)}).has_value());
 }
 
 TEST(MotionPrior, AGapOnAStraightLaneStaysAmbiguous) {

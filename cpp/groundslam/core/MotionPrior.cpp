@@ -16,6 +16,10 @@ std::vector<PredictedMotion> MotionPrior::predictions(double theta_rad) const {
   for (int k = first_steps_; k <= last_steps_; ++k) {
     const double turn_per_step = theta_rad / k;
     if (k > 1 && std::abs(wrapAngle(theta_rad - k * step_.theta)) > settings_.turn_doubt_rad) continue;
+    if (k == 1 && std::abs(wrapAngle(theta_rad - step_.theta)) > settings_.step_turn_doubt_rad &&
+        std::abs(wrapAngle(theta_rad)) < settings_.spin_min_rad) {
+      continue;
+    }
     // One step keeps its translation whatever the turn; k steps turn evenly, each moving as the usual step.
     const Pose2 one_step(step_.x, step_.y, k > 1 ? turn_per_step : 0.0);
     Pose2 motion;

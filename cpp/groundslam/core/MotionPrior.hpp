@@ -14,12 +14,16 @@ namespace groundslam {
 struct MotionPriorSettings {
   int max_steps = 8;               ///< most steps a gap may span (frames dropped without a trace)
   double turn_doubt_rad = 1.0 * 0.017453292519943295;  ///< over a gap, k usual steps turn as the motion does within this
+  /// One step turns as the usual one within this, or turns on the spot by at least spin_min_rad (a sharp turn);
+  /// between the two, a sudden turn is more likely a gap than one step.
+  double step_turn_doubt_rad = 5.0 * 0.017453292519943295;
+  double spin_min_rad = 70.0 * 0.017453292519943295;
   double sigma_m = 0.004;          ///< doubt of any prediction (a single fit is millimetres off on a rocking mount)
-  double sigma_fraction = 0.1;     ///< and per step, this share of the usual step's length (speed changes)
+  double sigma_fraction = 0.2;     ///< and per step, this share of the usual step's length (speed changes)
   /// The tilt's lever arm, metres per radian of turn chord (height * tilt bound): a turn by theta adds
   /// 2 |sin(theta / 2)| times this to the doubt.
   double lever_m = 0.0;
-  double max_doubts = 2.0;  ///< the chosen candidate is at most this many doubts off,
+  double max_doubts = 1.0;  ///< the chosen candidate is at most this many doubts off,
   double margin = 2.5;      ///< and every other at least this many times as far (and as many doubts) off
 };
 
@@ -36,8 +40,8 @@ class MotionPrior {
   /// are considered (both 1 when the timestamps show that no frame is missing; both k when they show a gap of k).
   MotionPrior(const Pose2& usual_step, int first_steps, int last_steps, const MotionPriorSettings& settings);
 
-  /// The motions the robot can have made if it turned by `theta` in all: one usual step whatever the turn (a turn
-  /// on the spot between the frames), or k steps each turning by theta / k where that is close to the usual turn.
+  /// The motions the robot can have made if it turned by `theta` in all: one usual step, turning as usual or on
+  /// the spot, or k steps each turning by theta / k where k usual turns make theta.
   std::vector<PredictedMotion> predictions(double theta_rad) const;
   /// How far a motion is from the nearest prediction with its turn, in doubts; infinity when none applies.
   double doubtsOff(const Pose2& T_prev_curr) const;

@@ -91,7 +91,8 @@ struct OdometryChecks {
   /// A fit refused for a rival transform (max_ambiguity) or for a motion unlike the robot's (a repeated floor:
   /// the true motion and its repetitions explain the matches alike) is decided by the robot's own motion
   /// (core/MotionPrior.hpp). Its usual step (the mean of the last good ones since the last sharp turn) once,
-  /// whatever the turn (a turn on the spot), or k = 2 .. repetition_max_steps of them (frames dropped without a
+  /// turning as usual within repetition_step_turn_deg or on the spot (a sharp turn, see sharp_turn_lever_m),
+  /// or k = 2 .. repetition_max_steps of them (frames dropped without a
   /// trace; k fixed when the timestamps show the gap) where k usual turns make the candidate's turn within
   /// repetition_turn_deg. A candidate's doubts: its distance to the nearest prediction over repetition_sigma_m +
   /// repetition_sigma_fraction * k * the step's length + the tilt's lever arm at its turn (see sharp_turn_lever_m).
@@ -100,9 +101,10 @@ struct OdometryChecks {
   /// times as far (and that many doubts) off; a fit without rivals only where its turn fixes k. 0 steps: off.
   int repetition_max_steps = 8;
   double repetition_turn_deg = 1.0;
+  double repetition_step_turn_deg = 5.0;
   double repetition_sigma_m = 0.004;
-  double repetition_sigma_fraction = 0.1;
-  double repetition_max_doubts = 2.0;
+  double repetition_sigma_fraction = 0.2;
+  double repetition_max_doubts = 1.0;
   double repetition_margin = 2.5;
 };
 
@@ -242,6 +244,7 @@ void visitConfigFields(Config_& c, Visitor&& v) {
   v("odometry", "gap_min_steps", c.odometry_checks.gap_min_steps, kNonNegative);
   v("odometry", "repetition_max_steps", c.odometry_checks.repetition_max_steps, Range{0, 1000});
   v("odometry", "repetition_turn_deg", c.odometry_checks.repetition_turn_deg, kNonNegative);
+  v("odometry", "repetition_step_turn_deg", c.odometry_checks.repetition_step_turn_deg, kNonNegative);
   v("odometry", "repetition_sigma_m", c.odometry_checks.repetition_sigma_m, kPositive);
   v("odometry", "repetition_sigma_fraction", c.odometry_checks.repetition_sigma_fraction, kNonNegative);
   v("odometry", "repetition_max_doubts", c.odometry_checks.repetition_max_doubts, kPositive);

@@ -461,6 +461,10 @@ std::optional<RigidEstimate> Slam::fitByMotion(const RigidEstimate& fit, const s
   settings.sigma_m = checks.repetition_sigma_m;
   settings.sigma_fraction = checks.repetition_sigma_fraction;
   settings.lever_m = calibrated_mount_.translation().z() * config_.outdoor.tilt_prior_deg * M_PI / 180.0;
+  settings.step_turn_doubt_rad = checks.repetition_step_turn_deg * M_PI / 180.0;
+  // A turn on the spot is a sharp turn (see sharpTurn): its lever arm exceeds sharp_turn_lever_m.
+  const double chord = settings.lever_m > 0.0 ? checks.sharp_turn_lever_m / (2.0 * settings.lever_m) : 2.0;
+  settings.spin_min_rad = chord < 1.0 ? 2.0 * std::asin(chord) : M_PI;
   settings.max_doubts = checks.repetition_max_doubts;
   settings.margin = checks.repetition_margin;
   const MotionPrior prior(usualStep(), first_steps, last_steps, settings);
