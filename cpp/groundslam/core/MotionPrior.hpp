@@ -12,7 +12,6 @@
 namespace groundslam {
 
 struct MotionPriorSettings {
-  int max_steps = 8;               ///< most steps a gap may span (frames dropped without a trace)
   double turn_doubt_rad = 1.0 * 0.017453292519943295;  ///< over a gap, k usual steps turn as the motion does within this
   /// One step turns as the usual one within this, or turns on the spot by at least spin_min_rad (a sharp turn);
   /// between the two, a sudden turn is more likely a gap than one step.

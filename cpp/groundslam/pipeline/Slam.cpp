@@ -456,7 +456,6 @@ std::optional<RigidEstimate> Slam::fitByMotion(const RigidEstimate& fit, const s
     if (ratio < 0.5 || ratio > 1.5) first_steps = last_steps = std::max(1, static_cast<int>(std::lround(ratio)));
   }
   MotionPriorSettings settings;
-  settings.max_steps = checks.repetition_max_steps;
   settings.turn_doubt_rad = checks.repetition_turn_deg * M_PI / 180.0;
   settings.sigma_m = checks.repetition_sigma_m;
   settings.sigma_fraction = checks.repetition_sigma_fraction;
