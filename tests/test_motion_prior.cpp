@@ -1,5 +1,6 @@
 // The robot's own motion tells a repeated floor's repetitions apart: known candidates, known choices.
 #include <cmath>
+#include <optional>
 
 #include <gtest/gtest.h>
 
@@ -97,6 +98,59 @@ TEST(MotionPrior, ATurnOnTheSpotKeepsTheStepAndNothingFarIsChosen) {
   EXPECT_EQ(*prior.choose(candidates), 1u);
   // Only repetitions, none where the robot went: none chosen.
   EXPECT_FALSE(prior.choose({Pose2(0.05, 0.0, 90 * kDeg), Pose2(-0.03, 0.0, 90 * kDeg)}).has_value());
+}
+
+TEST(MotionPrior, OnAStraightLaneTheMatchesDecideWhenOneMotionHasMostOfThem) {
+  // One 1 cm step, and the repetition a tile on (five steps: a gap without a trace would put it there). Both are
+  // where the robot can be; the matches decide when one has twice the other's inliers (measured on the outdoor
+  // tiles: 63 against 13, the repetition overlapping the image less). A rival to the side is no step at all.
+  const Pose2 step(0.01, 0.0, 0.0);
+  const MotionPrior prior(step, 1, 8, MotionPriorSettings{});
+  const std::vector<Pose2> candidates{Pose2(0.0098, -0.003, 0.0), Pose2(0.0482, -0.0034, 0.0), Pose2(0.0086, 0.036, 0.0)};
+  EXPECT_FALSE(prior.choose(candidates).has_value());  // by the steps alone: two motions
+  const auto chosen = prior.choose(candidates, {63, 13, 28});
+  ASSERT_TRUE(chosen.has_value());
+  EXPECT_EQ(*chosen, 0u);
+  // The rival to the side is ruled out by the steps: its 40 inliers do not count against the step.
+  EXPECT_EQ(prior.choose(candidates, {63, 13, 40}), std::optional<size_t>(0));
+  // Not twice: nothing chosen.
+  EXPECT_FALSE(prior.choose(candidates, {63, 40, 28}).has_value());
+  MotionPriorSettings off;
+  off.support_ratio = 0.0;
+  EXPECT_FALSE(MotionPrior(step, 1, 8, off).choose(candidates, {63, 13, 28}).has_value());
+}
+
+TEST(MotionPrior, AfterATurnOnTheSpotTheStepsGoOnAsBeforeOrTurnedWithTheCamera) {
+  // Before a quarter turn the robot stepped 1 cm along x in the camera's frame, turning 1.8 degrees a step. Its
+  // path goes on where it went (the camera turned, the path did not): now the step is 1 cm along -y. A tile on
+  // along x is four of the old steps, with the support of a repetition.
+  const Pose2 before(0.01, 0.0, 1.8 * kDeg);
+  const Pose2 turned(0.0, -0.01, 1.8 * kDeg);
+  const std::vector<Pose2> candidates{Pose2(0.0002, -0.0099, 1.8 * kDeg), Pose2(0.0402, -0.0099, 1.8 * kDeg)};
+  const MotionPrior both({before, turned}, 1, 8, MotionPriorSettings{});
+  ASSERT_EQ(both.predictions(1.8 * kDeg).size(), 2u);  // one step of each; more steps would turn more
+  EXPECT_LT(both.doubtsOff(candidates[0]), 0.1);
+  EXPECT_EQ(both.choose(candidates, {60, 20}), std::optional<size_t>(0));
+  // Told only the step before the turn, the true motion is 2.3 doubts off and the repetition is closer: none.
+  EXPECT_FALSE(MotionPrior(before, 1, 8, MotionPriorSettings{}).choose(candidates, {60, 20}).has_value());
+}
+
+TEST(MotionPrior, ASuddenChangeOfTurnIsOneStepOnlyWhenTheMatchesSaySo) {
+  // The robot turned 14 degrees a step, now goes straight: no prediction has that turn. One step's translation
+  // with 53 inliers against repetitions 4 cm away: chosen by the matches; without them, or when a repetition
+  // within reach has more than half the inliers, not.
+  const Pose2 step(-0.001, -0.0105, 14.3 * kDeg);
+  const MotionPrior prior(step, 1, 8, MotionPriorSettings{});
+  const std::vector<Pose2> candidates{Pose2(0.0016, -0.0098, 0.15 * kDeg), Pose2(0.0322, 0.0153, 0.38 * kDeg),
+                                      Pose2(0.0573, -0.0157, 0.05 * kDeg)};
+  EXPECT_TRUE(std::isinf(prior.doubtsOff(candidates[0])));
+  EXPECT_LT(prior.looseDoubtsOff(candidates[0]), 0.6);
+  EXPECT_FALSE(prior.choose(candidates).has_value());
+  EXPECT_EQ(prior.choose(candidates, {53, 38, 21}), std::optional<size_t>(0));
+  const std::vector<Pose2> near{candidates[0], Pose2(0.0016, -0.0198, 0.15 * kDeg)};  // a step further, 1 cm on
+  EXPECT_FALSE(prior.choose(near, {53, 38}).has_value());
+  // Timestamps that show a gap leave no room for a single step.
+  EXPECT_FALSE(MotionPrior(step, 3, 3, MotionPriorSettings{}).choose(candidates, {53, 38, 21}).has_value());
 }
 
 TEST(RigidFit, RivalsAreTheOtherRepetitionsStrongestFirst) {

@@ -223,21 +223,31 @@ TEST(Slam, AMotionUnlikeTheRobotsSpeedIsBelievedOnlyWhenTheImagesLeaveNoDoubt) {
   EXPECT_EQ(unchecked.process(simulator.renderFrame(16), 16.0).statusName(), "ok");
 }
 
-TEST(Slam, OnARepeatedFloorAJumpUnlikeTheRobotsSpeedStaysRefused) {
+TEST(Slam, OnARepeatedFloorAJumpUnlikeTheRobotsSpeedIsBelievedOnlyWhereTheMatchesChooseIt) {
   // The same hidden 7 cm jump on 4 cm tiles: every tile's copy of a feature also matches, so well under 80% of
-  // the matches agree with any one fit (here about a third) and the speed check keeps the frame from passing
-  // as `ok`, right or wrong.
+  // the matches agree with any one fit (here about a third) and the speed check refuses it. Seven steps and
+  // three (the repetition a tile behind) are both where the robot can be; the true one has over twice the
+  // other's inliers: believed, and it says gap. Without that (repetition_support_ratio 0) it falls back.
   sim::SimulationSettings settings;
   settings.texture_kind = "tiles";
   settings.path.kind = sim::PathKind::lawnmower;
   settings.path.frames = 30;
   const sim::SequenceSimulator simulator(settings);
-  Slam slam(configFor(settings), nullptr);
-  for (int i = 0; i < 10; ++i) ASSERT_NE(slam.process(simulator.renderFrame(i), i).statusName(), "lost") << i;
-  const FrameResult jump = slam.process(simulator.renderFrame(16), 10.0);
-  EXPECT_EQ(jump.statusName(), "fallback_implausible_motion");
+  const Pose2 truth = between(simulator.groundTruth()[9], simulator.groundTruth()[16]);
+  const auto jumpWith = [&](const Config& config) {
+    Slam slam(config, nullptr);
+    for (int i = 0; i < 10; ++i) EXPECT_EQ(slam.process(simulator.renderFrame(i), i).statusName(), i == 0 ? "first" : "ok") << i;
+    return slam.process(simulator.renderFrame(16), 10.0);
+  };
+  const FrameResult jump = jumpWith(configFor(settings));
+  EXPECT_EQ(jump.statusName(), "gap");
+  EXPECT_LT((jump.odometry.translation() - truth.translation()).norm(), 0.002);
   EXPECT_LT(jump.inliers, 0.6 * jump.matches);
-  EXPECT_GT(jump.inliers, configFor(settings).odometry.min_inliers);  // a fit was found: refused, not failed
+  Config unchosen = configFor(settings);
+  unchosen.odometry_checks.repetition_support_ratio = 0.0;
+  const FrameResult refused = jumpWith(unchosen);
+  EXPECT_EQ(refused.statusName(), "fallback_implausible_motion");
+  EXPECT_GT(refused.inliers, configFor(settings).odometry.min_inliers);  // a fit was found: refused, not failed
 }
 
 TEST(Slam, OnARepeatedFloorAHiddenGapWhileTurningIsBelievedWhereTheRobotsStepsGo) {

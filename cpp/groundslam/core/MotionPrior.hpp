@@ -24,6 +24,10 @@ struct MotionPriorSettings {
   double lever_m = 0.0;
   double max_doubts = 1.0;  ///< the chosen candidate is at most this many doubts off,
   double margin = 2.5;      ///< and every other at least this many times as far (and as many doubts) off
+  /// Failing that, the candidate within max_doubts with the most support is chosen when it has at least this
+  /// many times the support of every other candidate the prior does not rule out (closer than margin *
+  /// max_doubts): a tile over, a gap's repetition overlaps the image less and misses the unique dirt. 0 = off.
+  double support_ratio = 2.0;
 };
 
 /// A predicted motion and its doubt (one standard deviation of its translation, metres).
@@ -38,18 +42,24 @@ class MotionPrior {
   /// `usual_step`: the robot's motion between consecutive frames lately; steps from first_steps to last_steps
   /// are considered (both 1 when the timestamps show that no frame is missing; both k when they show a gap of k).
   MotionPrior(const Pose2& usual_step, int first_steps, int last_steps, const MotionPriorSettings& settings);
+  /// Several usual steps the robot may be making (after a turn on the spot: its steps as before, or turned with it).
+  MotionPrior(std::vector<Pose2> usual_steps, int first_steps, int last_steps, const MotionPriorSettings& settings);
 
   /// The motions the robot can have made if it turned by `theta` in all: one usual step, turning as usual or on
   /// the spot, or k steps each turning by theta / k where k usual turns make theta.
   std::vector<PredictedMotion> predictions(double theta_rad) const;
   /// How far a motion is from the nearest prediction with its turn, in doubts; infinity when none applies.
   double doubtsOff(const Pose2& T_prev_curr) const;
+  /// The same, where one step may also turn by any angle (a sudden change of the turn rate).
+  double looseDoubtsOff(const Pose2& T_prev_curr) const;
   /// The index of the nearest candidate when it is at most max_doubts off and every other at least `margin`
-  /// times as far (and `margin` doubts) off; none otherwise.
-  std::optional<size_t> choose(const std::vector<Pose2>& candidates) const;
+  /// times as far (and `margin` doubts) off; else, given each candidate's `support` (its inliers), the best
+  /// supported one within max_doubts when it has support_ratio times the support of every other candidate
+  /// closer than margin * max_doubts, both judged by looseDoubtsOff; none otherwise.
+  std::optional<size_t> choose(const std::vector<Pose2>& candidates, const std::vector<int>& support = {}) const;
 
  private:
-  Pose2 step_;
+  std::vector<Pose2> steps_;
   int first_steps_, last_steps_;
   MotionPriorSettings settings_;
 };

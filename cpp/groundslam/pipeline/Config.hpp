@@ -106,6 +106,13 @@ struct OdometryChecks {
   double repetition_sigma_fraction = 0.2;
   double repetition_max_doubts = 1.0;
   double repetition_margin = 2.5;
+  /// Failing that, the candidate within repetition_max_doubts with the most inliers is believed when it has this
+  /// many times the inliers of every other candidate closer than repetition_margin * repetition_max_doubts
+  /// (driving straight, a gap's repetition is some number of steps too, but overlaps the image less). 0 = off.
+  double repetition_support_ratio = 2.0;
+  /// Tracking lost before the map holds this many frames: the map starts again at the lost frame, the frames
+  /// before it are reported but left out (not measured, never places). 0: a lost segment is always relocalized.
+  int restart_map_below_frames = 10;
 };
 
 /// Outdoors and on real robots: features that stay still in the image, and the camera's tilt and height per
@@ -249,6 +256,8 @@ void visitConfigFields(Config_& c, Visitor&& v) {
   v("odometry", "repetition_sigma_fraction", c.odometry_checks.repetition_sigma_fraction, kNonNegative);
   v("odometry", "repetition_max_doubts", c.odometry_checks.repetition_max_doubts, kPositive);
   v("odometry", "repetition_margin", c.odometry_checks.repetition_margin, Range{1.0, 1000.0});
+  v("odometry", "repetition_support_ratio", c.odometry_checks.repetition_support_ratio, kNonNegative);
+  v("odometry", "restart_map_below_frames", c.odometry_checks.restart_map_below_frames, Range{0, 1e9});
   v("odometry", "fallback_sigma_m", c.fallback.sigma_m, kPositive);
   v("odometry", "fallback_sigma_rad", c.fallback.sigma_rad, kPositive);
   v("loop_closure", "enabled", c.loop_closure.enabled, Range{});

@@ -116,6 +116,16 @@ void LoopCloser::trackingLost(const std::vector<Pose2>& estimates) {
   if (!pending_.empty()) admitPlaces(pending_.back().frame, estimates);
 }
 
+void LoopCloser::abandonMap(const std::vector<Pose2>& estimates) {
+  trackingLost(estimates);
+  for (int& segment : segment_of_frame_) {
+    if (segment == kMapSegment) segment = kAbandonedSegment;
+  }
+  feature_map_.mergeSegment(kMapSegment, kAbandonedSegment);
+  pending_localization_.reset();
+  recent_loops_.clear();
+}
+
 void LoopCloser::admitPlaces(int last, const std::vector<Pose2>& estimates) {
   // The paper's delay: frame n-k may be found only from frame n on, so neighbours never close loops. It
   // becomes a place unless the map already covers its footprint; then only its pose is kept.

@@ -29,6 +29,8 @@ namespace groundslam {
 /// The segment tied to the map frame: the run's first frames (or a prior map's keyframes). A lost segment
 /// joins it when it relocalizes.
 constexpr int kMapSegment = 0;
+/// Frames given up when the map started again (Slam::restartMap).
+constexpr int kAbandonedSegment = -1;
 
 struct LoopClosureSettings {
   bool enabled = true;               ///< false: odometry only
@@ -94,6 +96,9 @@ class LoopCloser {
   /// neighbours (candidates never cross segments); relocalization can then find the ground seen just before,
   /// which is where a robot usually is after a gap.
   void trackingLost(const std::vector<Pose2>& estimates);
+  /// Tracking was lost after the last frame processed, and the map starts again with the next frame: the
+  /// frames so far belong to no segment (kAbandonedSegment); they are never loop candidates nor localized onto.
+  void abandonMap(const std::vector<Pose2>& estimates);
   /// Removes from frame `frame`'s features, while it still waits to become a place, those at these points
   /// (exactly: the caller's copies of the same features), e.g. ones found later to stay still in the image.
   void forgetPendingFeatures(int frame, const std::vector<Eigen::Vector2d>& points);

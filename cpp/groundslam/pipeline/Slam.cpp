@@ -98,27 +98,32 @@ FrameResult Slam::process(PreparedFrame prepared) {
       } else {
         last_good_odometry_seconds_ = current.timestamp - previous_->timestamp;
       }
+      // A turn on the spot may change the direction of the robot's steps as its camera sees them.
+      if (sharpTurn(odometry.T_prev_curr)) before_turn_ = std::make_pair(usualStep(), odometry.T_prev_curr.theta);
       recent_steps_.push_back(last_good_odometry_->T_prev_curr);
       if (recent_steps_.size() > kRecentSteps) recent_steps_.pop_front();
-      // A turn on the spot changes the direction of the robot's steps as its camera sees them.
       steps_since_turn_ = sharpTurn(odometry.T_prev_curr) ? 0 : steps_since_turn_ + 1;
     } else {
       // The speed is unknown again (a low-overlap motion usually spans a gap): the next motion is not judged by it.
       last_good_odometry_seconds_ = 0.0;
     }
-    if (odometry.fallback && loop_closer_) {
+    const bool restart = odometry.fallback && loop_closer_ && !lost_ && prior_frames_ == 0 &&
+                         frame - map_start_ < config_.odometry_checks.restart_map_below_frames;
+    if (restart) {
+      restartMap(odometry);  // lost before there is a map to come back to: the map starts here
+    } else if (odometry.fallback && loop_closer_) {
       startSegment(odometry);  // tracking lost: the motion is unknown, global localization will find the pose
     } else {
       addToGraph(odometry);
     }
-    result.status = lost_                 ? FrameStatus::lost
+    result.status = lost_ || restart      ? FrameStatus::lost
                     : odometry.fallback   ? FrameStatus::fallback
                     : odometry.low_overlap ? FrameStatus::low_overlap
                     : sharpTurn(odometry.T_prev_curr) ? FrameStatus::sharp_turn
                     : spansGap(steps) ? FrameStatus::gap
                                           : FrameStatus::ok;
     if (odometry.fallback) result.fallback_reason = odometry.fit_status;
-    measured_.push_back(!odometry.fallback && !lost_);
+    measured_.push_back((!odometry.fallback && !lost_) || map_start_ == frame);
   } else if (prior_frames_ > 0) {
     // On a prior map the first frame's pose is unknown until global localization finds it.
     graph_.addPose(Pose2());
@@ -207,6 +212,17 @@ void Slam::startSegment(const OdometryEdge& failed) {
   ++segment_;
   lost_ = true;
   lost_since_ = to;
+}
+
+void Slam::restartMap(const OdometryEdge& failed) {
+  // The frames so far are given up (reported, not measured): a relocalization onto a few frames' ground is
+  // rarely possible and, on a repeated floor, easily a look-alike.
+  const int from = static_cast<int>(graph_.poses().size()) - 1;
+  const int to = graph_.addPose(graph_.poses().back() * failed.T_prev_curr);
+  graph_.addEdge(informationFreeEdge(from, to, failed.T_prev_curr));
+  loop_closer_->abandonMap(graph_.poses());
+  std::fill(measured_.begin(), measured_.end(), false);
+  map_start_ = to;
 }
 
 void Slam::relocalize(const Keyframe& current, FrameResult& result) {
@@ -400,6 +416,10 @@ OdometryEdge Slam::estimateOdometry(const Keyframe& previous, const Keyframe& cu
   if (fit.ok() && !decisive && !plausibleMotion(fit.T_target_source, previous.timestamp, current.timestamp)) {
     fit.status = FitStatus::implausible_motion;
   }
+  // Not in the paper: on a floor that repeats (the fit has a rival), a motion unlike the robot's steps, or one
+  // a rival repetition is closer to, is judged by them below: after a gap of exactly one tile the fit says the
+  // robot stood still, with the most support.
+  if (fit.ok() && !fit.rivals.empty() && doubtedByTheSteps(fit, previous, current)) fit.status = FitStatus::implausible_motion;
   // Not in the paper: refused for its rivals or its speed on a repeated floor, the fit and its rivals are
   // judged by where the robot was going.
   if (fit.status == FitStatus::ambiguous || fit.status == FitStatus::implausible_motion) {
@@ -445,10 +465,8 @@ std::optional<std::pair<RigidEstimate, std::vector<Match>>> Slam::fitLowOverlap(
   return std::make_pair(fit, std::move(matches));
 }
 
-std::optional<RigidEstimate> Slam::fitByMotion(const RigidEstimate& fit, const std::vector<Match>& used,
-                                               const Keyframe& previous, const Keyframe& current) const {
+MotionPrior Slam::motionPrior(const Keyframe& previous, const Keyframe& current) const {
   const OdometryChecks& checks = config_.odometry_checks;
-  if (checks.repetition_max_steps <= 0 || !last_good_odometry_) return std::nullopt;
   int first_steps = 1, last_steps = checks.repetition_max_steps;
   if (last_good_odometry_seconds_ > 0.0 && current.timestamp > previous.timestamp) {
     // Timestamps that show how many frames are missing fix the steps (one for consecutive frames).
@@ -466,7 +484,23 @@ std::optional<RigidEstimate> Slam::fitByMotion(const RigidEstimate& fit, const s
   settings.spin_min_rad = chord < 1.0 ? 2.0 * std::asin(chord) : M_PI;
   settings.max_doubts = checks.repetition_max_doubts;
   settings.margin = checks.repetition_margin;
-  const MotionPrior prior(usualStep(), first_steps, last_steps, settings);
+  settings.support_ratio = checks.repetition_support_ratio;
+  return MotionPrior(usualSteps(), first_steps, last_steps, settings);
+}
+
+bool Slam::doubtedByTheSteps(const RigidEstimate& fit, const Keyframe& previous, const Keyframe& current) const {
+  const OdometryChecks& checks = config_.odometry_checks;
+  if (checks.repetition_max_steps <= 0 || !last_good_odometry_) return false;
+  const MotionPrior prior = motionPrior(previous, current);
+  const double off = prior.looseDoubtsOff(fit.T_target_source);
+  if (!(off <= checks.repetition_margin * checks.repetition_max_doubts)) return true;
+  return std::any_of(fit.rivals.begin(), fit.rivals.end(), [&](const Pose2& rival) { return prior.looseDoubtsOff(rival) < off; });
+}
+
+std::optional<RigidEstimate> Slam::fitByMotion(const RigidEstimate& fit, const std::vector<Match>& used,
+                                               const Keyframe& previous, const Keyframe& current) const {
+  if (config_.odometry_checks.repetition_max_steps <= 0 || !last_good_odometry_) return std::nullopt;
+  const MotionPrior prior = motionPrior(previous, current);
 
   // The candidates: the fit, its rival repetitions, and what the matches say near each motion the robot can
   // have made (the true motion may have too little support to be found among all the matches). Each is refined
@@ -496,14 +530,28 @@ std::optional<RigidEstimate> Slam::fitByMotion(const RigidEstimate& fit, const s
   // Alone, the fit is believed only where the turn shows how many steps the gap spans (one number of steps
   // turns by its angle besides a single step): driving straight, a repetition is some number of steps on too.
   if (candidates.size() < 2 && prior.predictions(fit.T_target_source.theta).size() > 2) return std::nullopt;
+  // Each at its best on all the matches: its inliers are its support.
+  std::vector<RigidEstimate> refined;
   std::vector<Pose2> motions;
-  for (const RigidEstimate& c : candidates) motions.push_back(c.T_target_source);
-  const std::optional<size_t> chosen = prior.choose(motions);
-  if (!chosen) return std::nullopt;
-  // The chosen one's inliers among all the matches, for the covariance and the frame's report.
-  RigidEstimate estimate = refineRigidTransform(previous_points, current_points, motions[*chosen], odometry_fitting_);
-  if (!estimate.ok()) return std::nullopt;
-  return estimate;
+  std::vector<int> support;
+  for (const RigidEstimate& c : candidates) {
+    refined.push_back(refineRigidTransform(previous_points, current_points, c.T_target_source, odometry_fitting_));
+    motions.push_back(refined.back().ok() ? refined.back().T_target_source : c.T_target_source);
+    support.push_back(refined.back().inliers);
+  }
+  const std::optional<size_t> chosen = prior.choose(motions, support);
+  if (!chosen || !refined[*chosen].ok()) return std::nullopt;
+  return refined[*chosen];
+}
+
+std::vector<Pose2> Slam::usualSteps() const {
+  if (steps_since_turn_ > 0 || !before_turn_) return {usualStep()};
+  // Right after a turn on the spot: the steps go on as before in the camera's frame (the robot drives where it
+  // now faces) or in the world's (the camera turned, the robot's path did not), turning as they turned.
+  const auto& [before, turn] = *before_turn_;
+  const double spun = wrapAngle(turn - before.theta);
+  const Eigen::Vector2d turned = Eigen::Rotation2Dd(-spun) * before.translation();
+  return {before, Pose2(turned.x(), turned.y(), before.theta)};
 }
 
 Pose2 Slam::usualStep() const {

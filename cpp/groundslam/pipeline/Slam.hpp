@@ -6,6 +6,7 @@
 #include <functional>
 #include <memory>
 #include <optional>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
@@ -111,13 +112,20 @@ class Slam {
                            const FitSettings& settings) const;
   /// Matches split into still ones and the rest; when the rest fit a motion that moves the still ones, that fit.
   std::optional<RigidEstimate> fitWithoutStill(const StillSplit& split, const Keyframe& previous, const Keyframe& current) const;
-  /// The second look at a pair whose fit failed: the fit and the matches it used, or nothing.
   /// A fit refused as ambiguous or implausible, its rival transforms and the fits near the motions the robot
   /// can have made: the one the robot's motion clearly points to (OdometryChecks::repetition_*), or none.
   std::optional<RigidEstimate> fitByMotion(const RigidEstimate& fit, const std::vector<Match>& used, const Keyframe& previous,
                                            const Keyframe& current) const;
   /// The robot's motion between consecutive frames lately (core/MotionPrior.hpp).
   Pose2 usualStep() const;
+  /// The steps the robot may be making now: the usual one, or right after a turn on the spot two (see MotionPrior).
+  std::vector<Pose2> usualSteps() const;
+  /// On a repeated floor: the fit is far from every motion the robot can have made (repetition_margin doubts),
+  /// or one of its rival repetitions is nearer to one.
+  bool doubtedByTheSteps(const RigidEstimate& fit, const Keyframe& previous, const Keyframe& current) const;
+  /// Where the robot can have gone between the two frames, from its usual steps (odometry.repetition_*).
+  MotionPrior motionPrior(const Keyframe& previous, const Keyframe& current) const;
+  /// The second look at a pair whose fit failed: the fit and the matches it used, or nothing.
   std::optional<std::pair<RigidEstimate, std::vector<Match>>> fitLowOverlap(const Keyframe& previous, const Keyframe& current) const;
   /// The current frame's roll, pitch and height from the odometry's inliers; its points re-projected and the
   /// odometry fitted again with them. Leaves everything as it was when the estimate fails.
@@ -165,6 +173,9 @@ class Slam {
   std::vector<Match> stillFeatures(const Keyframe& previous, const Keyframe& current, const Pose2& T_prev_curr) const;
   /// Tracking is lost: a new segment starts, tied to the last one by an edge with almost no information.
   void startSegment(const OdometryEdge& failed);
+  /// Tracking is lost before the map holds odometry.restart_map_below_frames frames: the map starts again at
+  /// this frame, and the frames before it are left out of it (not measured, never places or map keyframes).
+  void restartMap(const OdometryEdge& failed);
   /// While lost: global localization; once it is accepted, the segment joins the map and the graph is optimised.
   void relocalize(const Keyframe& current, FrameResult& result);
   void closeLoops(const Keyframe& current, FrameResult& result);
@@ -214,6 +225,7 @@ class Slam {
   static constexpr size_t kRecentSteps = 5;
   std::deque<Pose2> recent_steps_;  ///< the last kRecentSteps good motions, a gap's shared among its steps
   size_t steps_since_turn_ = 0;     ///< good motions since the last sharp turn (recent_steps_ before it point elsewhere)
+  std::optional<std::pair<Pose2, double>> before_turn_;  ///< the usual step before the last sharp turn, and its turn
   std::vector<double> timestamps_;
   std::vector<bool> measured_;  ///< per frame: its pose came from a measurement, not a fallback
   std::vector<LoopCandidate> candidates_;
@@ -228,6 +240,7 @@ class Slam {
   int segment_ = kMapSegment;  ///< the current tracking segment
   bool lost_ = false;          ///< tracking was lost and the current segment is not yet joined to the map
   int lost_since_ = 0;         ///< first frame of the current segment
+  int map_start_ = 0;          ///< the map's first frame (later than 0 when tracking was lost at once)
   int prior_frames_ = 0;       ///< graph poses 0..prior_frames_-1 are a prior map's keyframes, held fixed
   int last_prior_attempt_ = -1000000;  ///< frame of the last localization on the prior map
 };
