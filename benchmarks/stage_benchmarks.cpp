@@ -215,6 +215,17 @@ void BM_MotionPriorChoice(benchmark::State& state) {
 }
 BENCHMARK(BM_MotionPriorChoice)->Unit(benchmark::kMicrosecond);
 
+void BM_MotionPriorSupportChoice(benchmark::State& state) {
+  // Driving straight: one step and the repetition a tile on (five steps) both fit the steps; the matches decide.
+  // Two usual steps, as right after a turn on the spot.
+  const Pose2 step(0.01, 0.0, 0.0);
+  const MotionPrior prior(std::vector<Pose2>{step, Pose2(0.0, -0.01, 0.0)}, 1, 8, MotionPriorSettings{});
+  const std::vector<Pose2> candidates{Pose2(0.0098, -0.003, 0.0), Pose2(0.0482, -0.0034, 0.0), Pose2(0.0086, 0.036, 0.0)};
+  const std::vector<int> support{63, 13, 28};
+  for (auto _ : state) benchmark::DoNotOptimize(prior.choose(candidates, support));
+}
+BENCHMARK(BM_MotionPriorSupportChoice)->Unit(benchmark::kMicrosecond);
+
 void BM_LoopVerificationMatching(benchmark::State& state) {
   // A loop candidate's guided matching within the default drift window with no drift path:
   // 0.015 m + 0.15 m * 0.035 rad + 5 mm of keypoint slack.

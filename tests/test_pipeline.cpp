@@ -283,6 +283,49 @@ TEST(Slam, OnARepeatedFloorAHiddenGapWhileTurningIsBelievedWhereTheRobotsStepsGo
   EXPECT_EQ(refused[10].statusName().rfind("fallback", 0), 0u) << refused[10].statusName();
 }
 
+TEST(Slam, OnARepeatedFloorHiddenGapsOnAStraightLaneAreMeasuredOrRefused) {
+  // Two frames dropped without a trace, at eight places of a straight lane over 4 cm tiles with the outdoor look
+  // (flattened images): the robot went 3 cm, and the matches also say 1 cm back (a tile short) or 1 cm on.
+  // Judged by the robot's steps and the matches' support, 6 of 8 come out right (within 6 mm) and one is
+  // refused; the last says 3 mm back, 2.2 doubts from a step (the steps' blind spot, see README). Without the
+  // steps every such frame but that one is refused.
+  sim::SimulationSettings settings;
+  settings.texture_kind = "tiles";
+  settings.path.kind = sim::PathKind::lawnmower;  // the first lane is straight
+  settings.path.frames = 40;
+  settings.artifacts.shadow = 0.6;
+  settings.artifacts.lens_dirt = 6;
+  settings.artifacts.glare = 0.8;
+  settings.artifacts.bumper = 0.15;
+  settings.motion_blur = 0.3;
+  settings.mount_jitter_deg = 0.5;
+  const sim::SequenceSimulator simulator(settings);
+  std::vector<cv::Mat> images;
+  for (int i = 0; i < 31; ++i) images.push_back(simulator.renderFrame(i));
+  const auto count = [&](const Config& config, int& right, int& believed) {
+    right = believed = 0;
+    for (int last = 6; last < 28; last += 3) {
+      Slam slam(config, nullptr);  // odometry only
+      for (int i = 0; i <= last; ++i) slam.process(images[size_t(i)], i);
+      const FrameResult r = slam.process(images[size_t(last + 3)], last + 1.0);
+      if (!measuredByOdometry(r.status)) continue;
+      ++believed;
+      // Right: a rocking mount's few millimetres off, not a repetition (1 cm and more).
+      const Pose2 truth = between(simulator.groundTruth()[size_t(last)], simulator.groundTruth()[size_t(last + 3)]);
+      right += (r.odometry.translation() - truth.translation()).norm() < 0.006 ? 1 : 0;
+    }
+  };
+  int right = 0, believed = 0;
+  count(configFor(settings), right, believed);
+  EXPECT_EQ(right, 6);
+  EXPECT_EQ(believed, 7);
+  Config by_speed = configFor(settings);
+  by_speed.odometry_checks.repetition_max_steps = 0;
+  count(by_speed, right, believed);
+  EXPECT_EQ(right, 0);
+  EXPECT_EQ(believed, 1);
+}
+
 namespace {
 
 /// A straight lane with an outdoor robot's look (its shadow, lens dirt, glare, a bumper in view, a rocking

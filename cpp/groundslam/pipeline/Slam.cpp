@@ -416,10 +416,12 @@ OdometryEdge Slam::estimateOdometry(const Keyframe& previous, const Keyframe& cu
   if (fit.ok() && !decisive && !plausibleMotion(fit.T_target_source, previous.timestamp, current.timestamp)) {
     fit.status = FitStatus::implausible_motion;
   }
-  // Not in the paper: on a floor that repeats (the fit has a rival), a motion unlike the robot's steps, or one
-  // a rival repetition is closer to, is judged by them below: after a gap of exactly one tile the fit says the
-  // robot stood still, with the most support.
-  if (fit.ok() && !fit.rivals.empty() && doubtedByTheSteps(fit, previous, current)) fit.status = FitStatus::implausible_motion;
+  // Not in the paper: on a floor that repeats (this fit or one of the last kRepeatedFloorFrames had a rival), a
+  // motion unlike the robot's steps, or one a rival repetition is nearer to, is judged by them below: after a
+  // gap two frames long the matches say the robot stepped back by a tile minus three steps, without a rival.
+  if (!fit.rivals.empty()) last_rival_frame_ = current.index;
+  const bool repeated_floor = last_rival_frame_ >= 0 && current.index - last_rival_frame_ <= kRepeatedFloorFrames;
+  if (fit.ok() && repeated_floor && doubtedByTheSteps(fit, previous, current)) fit.status = FitStatus::implausible_motion;
   // Not in the paper: refused for its rivals or its speed on a repeated floor, the fit and its rivals are
   // judged by where the robot was going.
   if (fit.status == FitStatus::ambiguous || fit.status == FitStatus::implausible_motion) {

@@ -223,6 +223,9 @@ class Slam {
   /// The time between the two frames of last_good_odometry_; 0 after a failed frame (no speed to judge by).
   double last_good_odometry_seconds_ = 0.0;
   static constexpr size_t kRecentSteps = 5;
+  /// A floor is taken to repeat for this many frames after an odometry fit had a rival repetition.
+  static constexpr int kRepeatedFloorFrames = 20;
+  int last_rival_frame_ = -1;  ///< the last frame whose odometry fit had a rival
   std::deque<Pose2> recent_steps_;  ///< the last kRecentSteps good motions, a gap's shared among its steps
   size_t steps_since_turn_ = 0;     ///< good motions since the last sharp turn (recent_steps_ before it point elsewhere)
   std::optional<std::pair<Pose2, double>> before_turn_;  ///< the usual step before the last sharp turn, and its turn
