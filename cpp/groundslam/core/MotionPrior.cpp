@@ -78,8 +78,12 @@ std::optional<size_t> MotionPrior::choose(const std::vector<Pose2>& candidates, 
     if (off[i] <= settings_.max_doubts && (!best || support[i] > support[*best])) best = i;
   }
   if (!best) return std::nullopt;
+  // A sudden change of turn is less likely than a usual step: it must also be the best supported of all.
+  const bool sudden_turn = !(doubtsOff(candidates[*best]) <= settings_.max_doubts);
   for (size_t i = 0; i < candidates.size(); ++i) {
-    if (i == *best || !(off[i] < settings_.margin * settings_.max_doubts)) continue;
+    if (i == *best) continue;
+    if (sudden_turn && support[i] > support[*best]) return std::nullopt;
+    if (!(off[i] < settings_.margin * settings_.max_doubts)) continue;
     if (static_cast<double>(support[*best]) < settings_.support_ratio * static_cast<double>(support[i])) return std::nullopt;
   }
   return best;

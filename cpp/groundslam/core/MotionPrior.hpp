@@ -26,7 +26,7 @@ struct MotionPriorSettings {
   double margin = 2.5;      ///< and every other at least this many times as far (and as many doubts) off
   /// Failing that, the candidate within max_doubts with the most support is chosen when it has at least this
   /// many times the support of every other candidate the prior does not rule out (closer than margin *
-  /// max_doubts): a tile over, a gap's repetition overlaps the image less and misses the unique dirt. 0 = off.
+  /// max_doubts): a tile over, a gap's repetition overlaps the image less. 0 = off.
   double support_ratio = 2.0;
 };
 
@@ -55,7 +55,8 @@ class MotionPrior {
   /// The index of the nearest candidate when it is at most max_doubts off and every other at least `margin`
   /// times as far (and `margin` doubts) off; else, given each candidate's `support` (its inliers), the best
   /// supported one within max_doubts when it has support_ratio times the support of every other candidate
-  /// closer than margin * max_doubts, both judged by looseDoubtsOff; none otherwise.
+  /// closer than margin * max_doubts (both judged by looseDoubtsOff) and, when only a sudden change of turn
+  /// makes it a step, no less than any candidate; none otherwise.
   std::optional<size_t> choose(const std::vector<Pose2>& candidates, const std::vector<int>& support = {}) const;
 
  private:

@@ -108,10 +108,12 @@ struct OdometryChecks {
   double repetition_margin = 2.5;
   /// Failing that, the candidate within repetition_max_doubts with the most inliers is believed when it has this
   /// many times the inliers of every other candidate closer than repetition_margin * repetition_max_doubts
-  /// (driving straight, a gap's repetition is some number of steps too, but overlaps the image less). 0 = off.
+  /// (driving straight, a gap's repetition is some number of steps too, but overlaps the image less); one step
+  /// with a sudden change of turn also needs no fewer inliers than any candidate. 0 = off.
   double repetition_support_ratio = 2.0;
-  /// Tracking lost before the map holds this many frames: the map starts again at the lost frame, the frames
-  /// before it are reported but left out (not measured, never places). 0: a lost segment is always relocalized.
+  /// Tracking lost for the first time before the map holds this many frames: the map starts again at the lost
+  /// frame, the frames before it are reported but left out (not measured, never places). Only once: a floor that
+  /// keeps losing the robot makes no map by starting again. 0: a lost segment is always relocalized.
   int restart_map_below_frames = 10;
 };
 

@@ -107,8 +107,10 @@ FrameResult Slam::process(PreparedFrame prepared) {
       // The speed is unknown again (a low-overlap motion usually spans a gap): the next motion is not judged by it.
       last_good_odometry_seconds_ = 0.0;
     }
-    const bool restart = odometry.fallback && loop_closer_ && !lost_ && prior_frames_ == 0 &&
-                         frame - map_start_ < config_.odometry_checks.restart_map_below_frames;
+    // Only at the run's first loss (and the frames right after it that fail too: a covered lens): a floor that
+    // keeps losing the robot makes no map by starting again.
+    const bool restart = odometry.fallback && loop_closer_ && prior_frames_ == 0 && (!ever_lost_ || map_start_ == frame - 1) &&
+                         frame < config_.odometry_checks.restart_map_below_frames;
     if (restart) {
       restartMap(odometry);  // lost before there is a map to come back to: the map starts here
     } else if (odometry.fallback && loop_closer_) {
@@ -209,6 +211,7 @@ void Slam::startSegment(const OdometryEdge& failed) {
   const int to = graph_.addPose(graph_.poses().back() * failed.T_prev_curr);
   graph_.addEdge(informationFreeEdge(from, to, failed.T_prev_curr));
   loop_closer_->trackingLost(graph_.poses());
+  ever_lost_ = true;
   ++segment_;
   lost_ = true;
   lost_since_ = to;
@@ -221,6 +224,7 @@ void Slam::restartMap(const OdometryEdge& failed) {
   const int to = graph_.addPose(graph_.poses().back() * failed.T_prev_curr);
   graph_.addEdge(informationFreeEdge(from, to, failed.T_prev_curr));
   loop_closer_->abandonMap(graph_.poses());
+  ever_lost_ = true;
   std::fill(measured_.begin(), measured_.end(), false);
   map_start_ = to;
 }

@@ -244,6 +244,7 @@ class Slam {
   bool lost_ = false;          ///< tracking was lost and the current segment is not yet joined to the map
   int lost_since_ = 0;         ///< first frame of the current segment
   int map_start_ = 0;          ///< the map's first frame (later than 0 when tracking was lost at once)
+  bool ever_lost_ = false;     ///< tracking was lost before (the map starts again only at the run's first loss)
   int prior_frames_ = 0;       ///< graph poses 0..prior_frames_-1 are a prior map's keyframes, held fixed
   int last_prior_attempt_ = -1000000;  ///< frame of the last localization on the prior map
 };
