@@ -283,14 +283,13 @@ TEST(Slam, OnARepeatedFloorAHiddenGapWhileTurningIsBelievedWhereTheRobotsStepsGo
   EXPECT_EQ(refused[10].statusName().rfind("fallback", 0), 0u) << refused[10].statusName();
 }
 
-TEST(Slam, OnARepeatedFloorHiddenGapsOnAStraightLaneAreMeasuredOrRefused) {
-  // Two frames dropped without a trace, at eight places of a straight lane over 4 cm tiles with the outdoor look
-  // (flattened images): the robot went 3 cm, and the matches also say 1 cm back (a tile short) or 1 cm on.
-  // Judged by the robot's steps and the matches' support, 6 of 8 come out right (within 6 mm) and one is
-  // refused; the last says 3 mm back, 2.2 doubts from a step (the steps' blind spot, see README). Without the
-  // steps every such frame but that one is refused.
+namespace {
+
+/// 40 frames whose first lane is straight, with an outdoor robot's look: its shadow, lens dirt, glare, a bumper
+/// in view, a rocking mount, motion blur.
+sim::SimulationSettings outdoorLane(const char* texture) {
   sim::SimulationSettings settings;
-  settings.texture_kind = "tiles";
+  settings.texture_kind = texture;
   settings.path.kind = sim::PathKind::lawnmower;  // the first lane is straight
   settings.path.frames = 40;
   settings.artifacts.shadow = 0.6;
@@ -299,6 +298,18 @@ TEST(Slam, OnARepeatedFloorHiddenGapsOnAStraightLaneAreMeasuredOrRefused) {
   settings.artifacts.bumper = 0.15;
   settings.motion_blur = 0.3;
   settings.mount_jitter_deg = 0.5;
+  return settings;
+}
+
+}  // namespace
+
+TEST(Slam, OnARepeatedFloorHiddenGapsOnAStraightLaneAreMeasuredOrRefused) {
+  // Two frames dropped without a trace, at eight places of a straight lane over 4 cm tiles with the outdoor look
+  // (flattened images): the robot went 3 cm, and the matches also say 1 cm back (a tile short) or 1 cm on.
+  // Judged by the robot's steps and the matches' support, 6 of 8 come out right (within 6 mm) and one is
+  // refused; the last says 3 mm back, 2.2 doubts from a step (the steps' blind spot, see README). Without the
+  // steps every such frame but that one is refused.
+  const sim::SimulationSettings settings = outdoorLane("tiles");
   const sim::SequenceSimulator simulator(settings);
   std::vector<cv::Mat> images;
   for (int i = 0; i < 31; ++i) images.push_back(simulator.renderFrame(i));
@@ -328,19 +339,9 @@ TEST(Slam, OnARepeatedFloorHiddenGapsOnAStraightLaneAreMeasuredOrRefused) {
 
 namespace {
 
-/// A straight lane with an outdoor robot's look (its shadow, lens dirt, glare, a bumper in view, a rocking
-/// mount, motion blur): ten frames at 1 cm, then the image `jump` cm further on, one frame interval later.
+/// outdoorLane: ten frames at 1 cm, then the image `jump` cm further on, one frame interval later.
 FrameResult afterHiddenJump(const char* texture, int jump, double low_overlap_ratio, Pose2* truth) {
-  sim::SimulationSettings settings;
-  settings.texture_kind = texture;
-  settings.path.kind = sim::PathKind::lawnmower;  // the first lane is straight
-  settings.path.frames = 40;
-  settings.artifacts.shadow = 0.6;
-  settings.artifacts.lens_dirt = 6;
-  settings.artifacts.glare = 0.8;
-  settings.artifacts.bumper = 0.15;
-  settings.motion_blur = 0.3;
-  settings.mount_jitter_deg = 0.5;
+  const sim::SimulationSettings settings = outdoorLane(texture);
   const sim::SequenceSimulator simulator(settings);
   Config config = configFor(settings);
   config.odometry_checks.low_overlap_ratio = low_overlap_ratio;

@@ -112,8 +112,9 @@ struct OdometryChecks {
   /// with a sudden change of turn also needs no fewer inliers than any candidate. 0 = off.
   double repetition_support_ratio = 2.0;
   /// Tracking lost for the first time before the map holds this many frames: the map starts again at the lost
-  /// frame, the frames before it are reported but left out (not measured, never places). Only once: a floor that
-  /// keeps losing the robot makes no map by starting again. 0: a lost segment is always relocalized.
+  /// frame, the frames before it are reported but left out (not measured, never places). Only at the first loss
+  /// and the failing frames right after it: a floor that keeps losing the robot makes no map by starting again.
+  /// 0: a lost segment is always relocalized.
   int restart_map_below_frames = 10;
 };
 

@@ -205,11 +205,16 @@ void Slam::addToGraph(const OdometryEdge& odometry) {
                   informationFrom(odometry.covariance, config_.graph.min_sigma_m, config_.graph.min_sigma_rad), false});
 }
 
-void Slam::startSegment(const OdometryEdge& failed) {
-  // The relocalization edge, not this one, will decide where the new segment lies.
+int Slam::addUnmeasuredMotion(const OdometryEdge& failed) {
   const int from = static_cast<int>(graph_.poses().size()) - 1;
   const int to = graph_.addPose(graph_.poses().back() * failed.T_prev_curr);
   graph_.addEdge(informationFreeEdge(from, to, failed.T_prev_curr));
+  return to;
+}
+
+void Slam::startSegment(const OdometryEdge& failed) {
+  // The relocalization edge, not this one, will decide where the new segment lies.
+  const int to = addUnmeasuredMotion(failed);
   loop_closer_->trackingLost(graph_.poses());
   ever_lost_ = true;
   ++segment_;
@@ -220,9 +225,7 @@ void Slam::startSegment(const OdometryEdge& failed) {
 void Slam::restartMap(const OdometryEdge& failed) {
   // The frames so far are given up (reported, not measured): a relocalization onto a few frames' ground is
   // rarely possible and, on a repeated floor, easily a look-alike.
-  const int from = static_cast<int>(graph_.poses().size()) - 1;
-  const int to = graph_.addPose(graph_.poses().back() * failed.T_prev_curr);
-  graph_.addEdge(informationFreeEdge(from, to, failed.T_prev_curr));
+  const int to = addUnmeasuredMotion(failed);
   loop_closer_->abandonMap(graph_.poses());
   ever_lost_ = true;
   std::fill(measured_.begin(), measured_.end(), false);

@@ -173,9 +173,13 @@ class Slam {
   std::vector<Match> stillFeatures(const Keyframe& previous, const Keyframe& current, const Pose2& T_prev_curr) const;
   /// Tracking is lost: a new segment starts, tied to the last one by an edge with almost no information.
   void startSegment(const OdometryEdge& failed);
-  /// Tracking is lost before the map holds odometry.restart_map_below_frames frames: the map starts again at
-  /// this frame, and the frames before it are left out of it (not measured, never places or map keyframes).
+  /// Tracking is lost for the first time (or again right after) before the map holds
+  /// odometry.restart_map_below_frames frames: the map starts again at this frame, and the frames before it
+  /// are left out of it (not measured, never places or map keyframes).
   void restartMap(const OdometryEdge& failed);
+  /// A pose for a frame whose motion is unknown (the failed fit's fallback), tied by an edge with almost no
+  /// information; its index.
+  int addUnmeasuredMotion(const OdometryEdge& failed);
   /// While lost: global localization; once it is accepted, the segment joins the map and the graph is optimised.
   void relocalize(const Keyframe& current, FrameResult& result);
   void closeLoops(const Keyframe& current, FrameResult& result);
