@@ -10,6 +10,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "groundslam/core/FeatureExtraction.hpp"
+#include "groundslam/core/ImageAlignment.hpp"
 #include "groundslam/core/Matching.hpp"
 #include "groundslam/core/MotionPrior.hpp"
 #include "groundslam/core/NearestDescriptors.hpp"
@@ -276,6 +277,37 @@ void BM_StillFeatures(benchmark::State& state) {
   state.counters["still"] = static_cast<double>(found);
 }
 BENCHMARK(BM_StillFeatures)->Unit(benchmark::kMillisecond);
+
+void BM_AlignmentImage(benchmark::State& state) {
+  // Paid by every frame while odometry.align_images is on: the HD image reduced to 160 pixels wide, high-passed.
+  const ImageAlignmentSettings settings;
+  const cv::Mat& image = frames().first;  // rendered before the timing
+  for (auto _ : state) benchmark::DoNotOptimize(alignmentImage(image, settings));
+}
+BENCHMARK(BM_AlignmentImage)->Unit(benchmark::kMillisecond);
+
+void BM_ImageAlignment(benchmark::State& state) {
+  // Paid only by a frame whose features fail: the still parts, one start at the simulator's true motion moved by
+  // 2 pixels, and the four probes around the solution.
+  const ImageAlignmentSettings settings;
+  const AlignmentImage a = alignmentImage(frames().first, settings), b = alignmentImage(frames().second, settings);
+  // The true motion as a warp of current pixels to previous ones, through the camera, 2 pixels off.
+  std::vector<cv::Point2f> current_pixels{{400, 300}, {1200, 300}, {400, 900}}, previous_pixels;
+  for (const cv::Point2f& p : current_pixels) {
+    const auto ground = frames().camera.pixelToGround(Eigen::Vector2d(p.x, p.y));
+    const auto seen = frames().camera.groundToPixel(frames().simulator_truth_a_b * *ground);
+    previous_pixels.emplace_back(static_cast<float>(seen->x() + 2.0), static_cast<float>(seen->y()));
+  }
+  const cv::Matx23d start(cv::getAffineTransform(current_pixels, previous_pixels));
+  double correlation = 0.0;
+  for (auto _ : state) {
+    const ImageAlignment aligned = alignImages(a, b, {start}, settings);
+    correlation = aligned.correlation;
+    benchmark::DoNotOptimize(aligned);
+  }
+  state.counters["correlation"] = correlation;
+}
+BENCHMARK(BM_ImageAlignment)->Unit(benchmark::kMillisecond);
 
 void BM_MountEstimation(benchmark::State& state) {
   // One reference (the previous frame), the default 300 pairs; the pipeline uses up to three.

@@ -77,6 +77,21 @@ struct OdometryChecks {
   /// area, and over a gap a rocking mount's tilt differs between the frames (1 degree at 25 cm: 4 mm).
   double low_overlap_sigma_m = 0.005;
   double low_overlap_sigma_rad = 0.005;
+  /// Not in the paper: where the fit still has too little evidence (too few matches or inliers, or all of them in
+  /// a line: a smooth floor, mortar lines), the motion is found by aligning the two images themselves
+  /// (core/ImageAlignment.hpp, reduced to align_width_px), started from the robot's usual steps. It is believed
+  /// when the alignment's correlation reaches align_min_correlation, it explains the images align_rest_ratio times
+  /// better than rest does (their decorrelation at rest over that after the warp: what is left of a floor under a
+  /// glare and a shadow may say only "no motion"), starts a few pixels around it come back within
+  /// align_max_spread_m and its speed is plausible; the frame says `aligned`, and align_sigma_* are added
+  /// to the edge's standard deviations. false: off.
+  bool align_images = true;
+  int align_width_px = 160;
+  double align_min_correlation = 0.7;
+  double align_rest_ratio = 2.0;
+  double align_max_spread_m = 0.002;
+  double align_sigma_m = 0.005;
+  double align_sigma_rad = 0.005;
   /// A turn moves the ground by the camera's tilt error too: a tilt off by delta shifts every ground point by
   /// height * delta, and a turn by theta turns that shift into a translation error of 2 sin(theta / 2) * height *
   /// delta. One pair of views does not show the absolute tilt, so with delta = outdoor.tilt_prior_deg (the mount's
@@ -250,6 +265,13 @@ void visitConfigFields(Config_& c, Visitor&& v) {
   v("odometry", "low_overlap_max_match_share", c.odometry_checks.low_overlap_max_match_share, Range{0.0, 1.0});
   v("odometry", "low_overlap_sigma_m", c.odometry_checks.low_overlap_sigma_m, kNonNegative);
   v("odometry", "low_overlap_sigma_rad", c.odometry_checks.low_overlap_sigma_rad, kNonNegative);
+  v("odometry", "align_images", c.odometry_checks.align_images, Range{});
+  v("odometry", "align_width_px", c.odometry_checks.align_width_px, Range{16, 100000});
+  v("odometry", "align_min_correlation", c.odometry_checks.align_min_correlation, Range{0.0, 1.0});
+  v("odometry", "align_rest_ratio", c.odometry_checks.align_rest_ratio, kNonNegative);
+  v("odometry", "align_max_spread_m", c.odometry_checks.align_max_spread_m, kPositive);
+  v("odometry", "align_sigma_m", c.odometry_checks.align_sigma_m, kNonNegative);
+  v("odometry", "align_sigma_rad", c.odometry_checks.align_sigma_rad, kNonNegative);
   v("odometry", "sharp_turn_lever_m", c.odometry_checks.sharp_turn_lever_m, kNonNegative);
   v("odometry", "gap_min_steps", c.odometry_checks.gap_min_steps, kNonNegative);
   v("odometry", "repetition_max_steps", c.odometry_checks.repetition_max_steps, Range{0, 1000});

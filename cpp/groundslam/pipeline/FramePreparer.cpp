@@ -13,12 +13,20 @@ CameraModel cameraModelFrom(const CameraConfig& c) {
   return CameraModel(intrinsicsOf(c), T_robot_camera);
 }
 
+ImageAlignmentSettings alignmentSettingsFrom(const Config& config) {
+  ImageAlignmentSettings settings;
+  settings.width_px = config.odometry_checks.align_width_px;
+  return settings;
+}
+
 FramePreparer::FramePreparer(const Config& config)
     : camera_(cameraModelFrom(config.camera)),
       extractor_(config.features),
       matcher_(config.matching),
       near_twin_max_distance_(config.features.near_twin_max_distance),
-      decoder_reduction_(decoderReductionFor(config.camera.image_width, config.features.max_extraction_width)) {}
+      decoder_reduction_(decoderReductionFor(config.camera.image_width, config.features.max_extraction_width)) {
+  if (config.odometry_checks.align_images) alignment_ = alignmentSettingsFrom(config);
+}
 
 PreparedFrame FramePreparer::prepare(const cv::Mat& image, double timestamp, int reduced_by) const {
   // ORB keypoints and descriptors, projected to metric points on the ground plane (paper eqs. 2-4).
@@ -28,6 +36,7 @@ PreparedFrame FramePreparer::prepare(const cv::Mat& image, double timestamp, int
   const ImageFeatures image_features = extractor_.detect(image, reduced_by);
   prepared.extract_ms = timer.lap();
   prepared.features = dropNearTwins(projectToGround(image_features, camera_), near_twin_max_distance_);
+  if (alignment_) prepared.alignment = alignmentImage(image, *alignment_, reduced_by);
   prepared.project_ms = timer.lap();
   return prepared;
 }

@@ -10,6 +10,7 @@
 
 #include "groundslam/core/CameraModel.hpp"
 #include "groundslam/core/FeatureExtraction.hpp"
+#include "groundslam/core/ImageAlignment.hpp"
 #include "groundslam/core/Matching.hpp"
 #include "groundslam/pipeline/Config.hpp"
 
@@ -29,7 +30,12 @@ struct PreparedFrame {
   /// was given just before this frame. Empty: Slam matches by itself.
   std::optional<std::vector<Match>> matches_to_previous;
   double match_ms = 0.0;
+  /// The image reduced for aligning it with the next one where features are too few (odometry.align_images; empty when off).
+  AlignmentImage alignment;
 };
+
+/// The alignment settings a configuration describes (odometry.align_*).
+ImageAlignmentSettings alignmentSettingsFrom(const Config& config);
 
 class FramePreparer {
  public:
@@ -48,6 +54,7 @@ class FramePreparer {
   DescriptorMatcher matcher_;
   int near_twin_max_distance_;
   int decoder_reduction_;
+  std::optional<ImageAlignmentSettings> alignment_;  ///< empty: odometry.align_images is off
 };
 
 }  // namespace groundslam

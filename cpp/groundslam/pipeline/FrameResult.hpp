@@ -25,6 +25,7 @@ enum class FrameStatus {
   first,        ///< the first frame of the session: the origin
   ok,           ///< odometry measured the motion from the previous frame
   low_overlap,  ///< odometry measured it from a second, looser matching of a low-overlap pair: less certain
+  aligned,      ///< too few features: the motion was measured by aligning the two images themselves: less certain
   sharp_turn,   ///< odometry measured it, but the turn is so sharp that the unknown tilt may move it by millimetres
   gap,          ///< odometry measured it across dropped frames (several frames' travel): the mount rocked meanwhile
   fallback,     ///< odometry failed (FrameResult::fallback_reason); the previous motion was assumed
@@ -53,13 +54,14 @@ struct FrameResult {
   MountState mount;           ///< the camera's roll, pitch and height used for this frame's ground points
   bool mount_estimated = false;  ///< mount was estimated from the images (else the calibrated mount)
   StageTimes times;
-  /// frames.csv's `status`: first | ok | low_overlap | sharp_turn | gap | fallback_<reason> (e.g. fallback_too_few_matches) | lost_<reason> (the
+  /// frames.csv's `status`: first | ok | low_overlap | aligned | sharp_turn | gap | fallback_<reason> (e.g. fallback_too_few_matches) | lost_<reason> (the
   /// frame whose failed odometry lost tracking, e.g. lost_degenerate) | lost (a later frame of a lost segment) | relocalized.
   std::string statusName() const {
     switch (status) {
       case FrameStatus::first: return "first";
       case FrameStatus::ok: return "ok";
       case FrameStatus::low_overlap: return "low_overlap";
+      case FrameStatus::aligned: return "aligned";
       case FrameStatus::sharp_turn: return "sharp_turn";
       case FrameStatus::gap: return "gap";
       case FrameStatus::fallback: return std::string("fallback_") + fitStatusName(fallback_reason);

@@ -45,7 +45,8 @@ Slam::Slam(const Config& config, std::shared_ptr<const Vocabulary> vocabulary)
       calibrated_mount_(camera_.T_robot_camera()),
       ground_sample_m_(camera_.groundSampleDistance()),
       artifact_mask_(intrinsicsOf(config.camera), config.outdoor.mask),
-      graph_(config.graph.solver) {
+      graph_(config.graph.solver),
+      alignment_settings_(alignmentSettingsFrom(config)) {
   odometry_fitting_.measure_ambiguity = true;
   const CameraIntrinsics k = intrinsicsOf(config.camera);
   mount_baseline_m_ = config.outdoor.baseline_fraction * std::min(k.width, k.height) * ground_sample_m_;
@@ -78,11 +79,11 @@ FrameResult Slam::process(PreparedFrame prepared) {
   std::vector<Match> still;  // matches of this frame to the previous one that stayed still in the image
   // §III-B: match to the previous image, fit T_prev_curr with a robust M-estimator (eqs. 5-6), add the edge.
   if (previous_) {
-    OdometryEdge odometry = estimateOdometry(*previous_, current, prepared.matches_to_previous, result);
+    OdometryEdge odometry = estimateOdometry(*previous_, current, prepared.matches_to_previous, prepared.alignment, result);
     // Only where something already stayed still (a still match, an artifact cell): a clean floor pays nothing.
     const bool artifacts_seen = result.still_matches > 0 || artifact_mask_.artifactCells() > 0;
     if (!odometry.fallback && artifacts_seen) still = stillFeatures(*previous_, current, odometry.T_prev_curr);
-    if (!odometry.fallback && config_.outdoor.estimate_mount) estimateMountOf(*previous_, current, odometry, result);
+    if (!odometry.fallback && !odometry.aligned && config_.outdoor.estimate_mount) estimateMountOf(*previous_, current, odometry, result);
     result.odometry = odometry.T_prev_curr;
     rocking_steps_.resize(static_cast<size_t>(frame) + 1, 1.0);
     // Only a gap counts: between frames the mount rocks as it does at any speed (measured: with every speed change
@@ -121,6 +122,7 @@ FrameResult Slam::process(PreparedFrame prepared) {
     result.status = lost_ || restart      ? FrameStatus::lost
                     : odometry.fallback   ? FrameStatus::fallback
                     : odometry.low_overlap ? FrameStatus::low_overlap
+                    : odometry.aligned ? FrameStatus::aligned
                     : sharpTurn(odometry.T_prev_curr) ? FrameStatus::sharp_turn
                     : spansGap(steps) ? FrameStatus::gap
                                           : FrameStatus::ok;
@@ -158,6 +160,7 @@ FrameResult Slam::process(PreparedFrame prepared) {
     while (recent_.size() > 30) recent_.pop_front();
   }
   previous_ = std::move(current);
+  previous_alignment_ = std::move(prepared.alignment);
   result.times.total_ms = prepared.extract_ms + prepared.project_ms + total.lap();
   return result;
 }
@@ -367,7 +370,8 @@ std::optional<RigidEstimate> Slam::fitWithoutStill(const StillSplit& split, cons
 }
 
 OdometryEdge Slam::estimateOdometry(const Keyframe& previous, const Keyframe& current,
-                                    const std::optional<std::vector<Match>>& matched_ahead, FrameResult& result) {
+                                    const std::optional<std::vector<Match>>& matched_ahead, const AlignmentImage& alignment,
+                                    FrameResult& result) {
   StageTimer timer;
   RigidEstimate fit;
   std::vector<Match> matches;
@@ -451,6 +455,13 @@ OdometryEdge Slam::estimateOdometry(const Keyframe& previous, const Keyframe& cu
       edge.low_overlap = true;
       edge.covariance += sigmaCovariance(config_.odometry_checks.low_overlap_sigma_m, config_.odometry_checks.low_overlap_sigma_rad);
       return edge;
+    }
+  }
+  // Still too little evidence (a smooth floor, mortar lines): the images themselves are aligned.
+  if (too_little) {
+    if (auto aligned = odometryByAlignment(previous, current, alignment)) {
+      aligned->matches = result.matches;
+      return *aligned;
     }
   }
   OdometryEdge edge{fit.T_target_source, fit.covariance, result.matches, fit.inliers, fit.status, false, std::move(used),

@@ -49,6 +49,7 @@ struct OdometryEdge {
   std::vector<Match> used;  ///< the matches the fit used (still ones left out)
   double rms_residual_m = 0.0;  ///< of the fit's inliers
   bool low_overlap = false;  ///< measured by the second, looser matching (OdometryChecks::low_overlap_ratio)
+  bool aligned = false;      ///< measured by aligning the two images (OdometryChecks::align_images)
 };
 
 class Slam {
@@ -104,7 +105,15 @@ class Slam {
 
  private:
   OdometryEdge estimateOdometry(const Keyframe& previous, const Keyframe& current,
-                                const std::optional<std::vector<Match>>& matched_ahead, FrameResult& result);
+                                const std::optional<std::vector<Match>>& matched_ahead, const AlignmentImage& alignment,
+                                FrameResult& result);
+  /// Where the features are too few: the motion from aligning the previous image with this one, started from the
+  /// robot's usual steps (odometry.align_*), or nothing (pipeline/SlamAlignment.cpp).
+  std::optional<OdometryEdge> odometryByAlignment(const Keyframe& previous, const Keyframe& current, const AlignmentImage& alignment) const;
+  /// The pixel warp (current image to previous) a ground motion T_prev_curr makes, and the ground motion of a warp;
+  /// both through the calibrated camera, over a grid of the image's pixels.
+  cv::Matx23d imageWarpOf(const Pose2& T_prev_curr) const;
+  Pose2 groundMotionOf(const cv::Matx23d& W_previous_current) const;
   /// The robust refinement alone from a transform known to within a few millimetres (see refineRigidTransform).
   RigidEstimate refineMatches(const std::vector<Match>& matches, const Keyframe& previous, const Keyframe& current,
                               const Pose2& initial) const;
@@ -223,6 +232,8 @@ class Slam {
   std::optional<LoopCloser> loop_closer_;
   PoseGraph graph_;
   std::optional<Keyframe> previous_;
+  AlignmentImage previous_alignment_;  ///< the previous image as the alignment uses it (odometry.align_images)
+  ImageAlignmentSettings alignment_settings_;
   std::optional<OdometryEdge> last_good_odometry_;
   /// The time between the two frames of last_good_odometry_; 0 after a failed frame (no speed to judge by).
   double last_good_odometry_seconds_ = 0.0;

@@ -1,0 +1,206 @@
+#include "groundslam/core/ImageAlignment.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <optional>
+#include <utility>
+
+#include <opencv2/imgproc.hpp>
+#include <opencv2/video/tracking.hpp>
+
+namespace groundslam {
+namespace {
+
+/// Reduced pixel i averages original pixels s*i .. s*i+s-1: original = s * reduced + (s - 1) / 2.
+cv::Matx33d reducedToOriginal(double scale) { return {scale, 0.0, (scale - 1.0) / 2.0, 0.0, scale, (scale - 1.0) / 2.0, 0.0, 0.0, 1.0}; }
+
+cv::Matx33d homogeneous(const cv::Matx23d& W) { return {W(0, 0), W(0, 1), W(0, 2), W(1, 0), W(1, 1), W(1, 2), 0.0, 0.0, 1.0}; }
+
+cv::Matx23d affinePart(const cv::Matx33d& H) { return {H(0, 0), H(0, 1), H(0, 2), H(1, 0), H(1, 1), H(1, 2)}; }
+
+/// How far two warps take the image's centre and corners apart (pixels of the image of size `size`).
+double warpDistance(const cv::Matx23d& a, const cv::Matx23d& b, cv::Size size) {
+  const double w = size.width - 1.0, h = size.height - 1.0;
+  const std::array<cv::Vec3d, 5> probes{cv::Vec3d(0, 0, 1), cv::Vec3d(w, 0, 1), cv::Vec3d(0, h, 1), cv::Vec3d(w, h, 1),
+                                        cv::Vec3d(w / 2, h / 2, 1)};
+  double farthest = 0.0;
+  for (const cv::Vec3d& p : probes) farthest = std::max(farthest, cv::norm((a - b) * p));
+  return farthest;
+}
+
+/// One ECC run from `start` (reduced pixels); empty when it does not converge.
+std::optional<std::pair<cv::Matx23d, double>> eccFrom(const cv::Mat& previous, const cv::Mat& current, const cv::Mat& mask,
+                                                      const cv::Matx23d& start, int max_iterations) {
+  cv::Mat warp;
+  cv::Mat(start).convertTo(warp, CV_32F);
+  try {
+    // Template: the current image; input: the previous one. The warp maps a current pixel to the previous image.
+    const double correlation = cv::findTransformECC(current, previous, warp, cv::MOTION_EUCLIDEAN,
+                                                    cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, max_iterations, 1e-4),
+                                                    mask, 5);
+    if (!std::isfinite(correlation)) return std::nullopt;
+    cv::Matx23d W;
+    for (int r = 0; r < 2; ++r) {
+      for (int c = 0; c < 3; ++c) W(r, c) = static_cast<double>(warp.at<float>(r, c));
+    }
+    return std::make_pair(W, correlation);
+  } catch (const cv::Exception&) {
+    return std::nullopt;  // OpenCV reports a diverging or uncorrelated alignment by throwing: here it is data
+  }
+}
+
+}  // namespace
+
+cv::Matx23d toReducedPixels(const cv::Matx23d& W, double scale) {
+  const cv::Matx33d S = reducedToOriginal(scale);
+  return affinePart(S.inv() * homogeneous(W) * S);
+}
+
+cv::Matx23d toOriginalPixels(const cv::Matx23d& W_reduced, double scale) {
+  const cv::Matx33d S = reducedToOriginal(scale);
+  return affinePart(S * homogeneous(W_reduced) * S.inv());
+}
+
+AlignmentImage alignmentImage(const cv::Mat& gray, const ImageAlignmentSettings& settings, int reduced_by) {
+  AlignmentImage aligned;
+  const int factor = std::max(1, (gray.cols + settings.width_px - 1) / std::max(1, settings.width_px));
+  // Whole blocks only, as for feature extraction: reduced pixel i averages exactly original pixels f*i .. f*i+f-1.
+  const cv::Size size(std::max(1, gray.cols / factor), std::max(1, gray.rows / factor));
+  cv::Mat reduced;
+  cv::resize(gray(cv::Rect(0, 0, size.width * factor, size.height * factor)), reduced, size, 0.0, 0.0, cv::INTER_AREA);
+  reduced.convertTo(reduced, CV_32F);
+  cv::Mat background;
+  cv::GaussianBlur(reduced, background, cv::Size(0, 0), std::max(1.0, settings.highpass_fraction * size.width), 0.0, cv::BORDER_REFLECT);
+  aligned.pixels = reduced - background;
+  aligned.scale = static_cast<double>(factor) * std::max(1, reduced_by);
+  return aligned;
+}
+
+namespace {
+
+/// Local normalised cross-correlation of two images, pixel by pixel, over 7 x 7 neighbourhoods; and where both
+/// neighbourhoods have texture (a few grey levels of contrast: flat ones look alike anywhere).
+std::pair<cv::Mat, cv::Mat> localCorrelation(const cv::Mat& a, const cv::Mat& b) {
+  const cv::Size window(7, 7);
+  cv::Mat mean_a, mean_b, aa, bb, ab;
+  cv::blur(a, mean_a, window);
+  cv::blur(b, mean_b, window);
+  cv::blur(a.mul(a), aa, window);
+  cv::blur(b.mul(b), bb, window);
+  cv::blur(a.mul(b), ab, window);
+  const cv::Mat var_a = aa - mean_a.mul(mean_a), var_b = bb - mean_b.mul(mean_b), cov = ab - mean_a.mul(mean_b);
+  cv::Mat denominator;
+  cv::sqrt(cv::max(var_a.mul(var_b), 1e-6), denominator);
+  constexpr double kMinVariance = 4.0;
+  return {cov / denominator, (var_a > kMinVariance) & (var_b > kMinVariance)};
+}
+
+}  // namespace
+
+cv::Mat movingPixels(const cv::Mat& previous, const cv::Mat& current, const cv::Matx23d& W_expected, double still_correlation) {
+  // Still: alike in place, and more alike in place than where the expected motion puts the ground (a smooth
+  // floor's gradients look alike after any small shift; a shadow's edge only in place).
+  const auto [in_place, textured] = localCorrelation(previous, current);
+  cv::Mat moved_previous;
+  cv::warpAffine(previous, moved_previous, W_expected, previous.size(), cv::INTER_LINEAR | cv::WARP_INVERSE_MAP, cv::BORDER_REFLECT);
+  const cv::Mat moved = localCorrelation(moved_previous, current).first;
+  cv::Mat still = (in_place > still_correlation) & (in_place > moved) & textured;
+  cv::dilate(still, still, cv::Mat::ones(5, 5, CV_8U));
+  cv::Mat moving;
+  cv::bitwise_not(still, moving);
+  return moving;
+}
+
+ImageAlignment alignImages(const AlignmentImage& previous, const AlignmentImage& current, const std::vector<cv::Matx23d>& starts,
+                           const ImageAlignmentSettings& settings) {
+  ImageAlignment best;
+  if (previous.pixels.empty() || previous.pixels.size() != current.pixels.size() || previous.scale != current.scale) return best;
+  if (starts.empty()) return best;
+  // What stayed still is blanked in both images (and masked): neither side's artifacts can pull the warp to rest.
+  const cv::Mat moving = movingPixels(previous.pixels, current.pixels, toReducedPixels(starts.front(), previous.scale), settings.still_correlation);
+  cv::Mat previous_ground = cv::Mat::zeros(previous.pixels.size(), CV_32F), current_ground = previous_ground.clone();
+  previous.pixels.copyTo(previous_ground, moving);
+  current.pixels.copyTo(current_ground, moving);
+
+  std::optional<cv::Matx23d> best_reduced;
+  for (const cv::Matx23d& start : starts) {
+    const auto solution = eccFrom(previous_ground, current_ground, moving, toReducedPixels(start, previous.scale), settings.max_iterations);
+    if (solution && (!best_reduced || solution->second > best.correlation)) {
+      best_reduced = solution->first;
+      best.correlation = solution->second;
+    }
+  }
+  if (!best_reduced) return best;
+  best.converged = true;
+  // ECC's correlation at rest: zero-mean images, over the pixels both show and the alignment used.
+  cv::Scalar mean_p, std_p, mean_c, std_c;
+  cv::meanStdDev(previous_ground, mean_p, std_p, moving);
+  cv::meanStdDev(current_ground, mean_c, std_c, moving);
+  const double n = cv::countNonZero(moving);
+  if (n > 0 && std_p[0] > 0.0 && std_c[0] > 0.0) {
+    cv::Mat product = (previous_ground - mean_p[0]).mul(current_ground - mean_c[0]);
+    best.rest_correlation = cv::sum(product.setTo(0.0, moving == 0))[0] / (n * std_p[0] * std_c[0]);
+  }
+  best.W_previous_current = toOriginalPixels(*best_reduced, previous.scale);
+  // Probes: from starts shifted around the solution, the alignment must come back to it.
+  const double d = settings.probe_px;
+  for (const cv::Vec2d& shift : {cv::Vec2d(d, 0), cv::Vec2d(0, d), cv::Vec2d(-d, 0), cv::Vec2d(0, -d)}) {
+    cv::Matx23d start = *best_reduced;
+    start(0, 2) += shift[0];
+    start(1, 2) += shift[1];
+    const auto probe = eccFrom(previous_ground, current_ground, moving, start, settings.max_iterations);
+    const double off = probe ? warpDistance(probe->first, *best_reduced, previous.pixels.size()) : d * 1e3;
+    best.spread_px = std::max(best.spread_px, off * previous.scale);
+  }
+  return best;
+}
+
+std::vector<cv::Matx23d> turnCandidates(const AlignmentImage& previous, const AlignmentImage& current, const cv::Point2d& centre_px,
+                                        double step_deg, double margin) {
+  if (previous.pixels.empty() || previous.pixels.size() != current.pixels.size() || !(step_deg > 0.0)) return {};
+  constexpr double kCoarse = 4.0;
+  cv::Mat p, c;
+  const cv::Size small(std::max(1, previous.pixels.cols / 4), std::max(1, previous.pixels.rows / 4));
+  cv::resize(previous.pixels, p, small, 0.0, 0.0, cv::INTER_AREA);
+  cv::resize(current.pixels, c, small, 0.0, 0.0, cv::INTER_AREA);
+  const double scale = previous.scale * kCoarse;
+  const cv::Point2d centre((centre_px.x - (scale - 1.0) / 2.0) / scale, (centre_px.y - (scale - 1.0) / 2.0) / scale);
+  const cv::Mat ones = cv::Mat::ones(small, CV_8U);
+  std::vector<std::pair<double, cv::Matx23d>> turns;  // correlation, warp in coarse pixels
+  const int count = static_cast<int>(std::lround(360.0 / step_deg));
+  for (int i = 0; i < count; ++i) {
+    const double angle = (i * step_deg - 180.0) * M_PI / 180.0;
+    const double co = std::cos(angle), si = std::sin(angle);
+    const cv::Matx23d W(co, -si, centre.x - co * centre.x + si * centre.y, si, co, centre.y - si * centre.x - co * centre.y);
+    cv::Mat turned, inside;
+    cv::warpAffine(p, turned, W, small, cv::INTER_LINEAR | cv::WARP_INVERSE_MAP);
+    cv::warpAffine(ones, inside, W, small, cv::INTER_NEAREST | cv::WARP_INVERSE_MAP);
+    cv::Mat shown;
+    cv::erode(inside, shown, cv::Mat::ones(3, 3, CV_8U));  // no interpolated border
+    cv::Scalar mean_t, std_t, mean_c, std_c;
+    cv::meanStdDev(turned, mean_t, std_t, shown);
+    cv::meanStdDev(c, mean_c, std_c, shown);
+    const double n = cv::countNonZero(shown);
+    double correlation = -1.0;
+    if (n > 0.25 * small.area() && std_t[0] > 0.0 && std_c[0] > 0.0) {
+      cv::Mat product = (turned - mean_t[0]).mul(c - mean_c[0]);
+      correlation = cv::sum(product.setTo(0.0, shown == 0))[0] / (n * std_t[0] * std_c[0]);
+    }
+    turns.emplace_back(correlation, W);
+  }
+  double best = -1.0;
+  for (const auto& turn : turns) best = std::max(best, turn.first);
+  std::vector<std::pair<double, cv::Matx23d>> kept;
+  for (size_t i = 0; i < turns.size(); ++i) {
+    const double before = turns[(i + turns.size() - 1) % turns.size()].first, after = turns[(i + 1) % turns.size()].first;
+    const bool local_best = turns[i].first >= before && turns[i].first >= after;
+    if (local_best && turns[i].first >= best - margin && turns[i].first > 0.0) kept.push_back(turns[i]);
+  }
+  std::sort(kept.begin(), kept.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
+  std::vector<cv::Matx23d> warps;
+  for (const auto& turn : kept) warps.push_back(toOriginalPixels(turn.second, scale));
+  return warps;
+}
+
+}  // namespace groundslam

@@ -1,0 +1,68 @@
+#pragma once
+// Not in the paper: where a floor gives too few keypoints to fit a motion (smooth concrete, a floor of bricks
+// whose only corners are the mortar joints, a floor seen through a shadow), the motion between two consecutive
+// images is found by aligning the images themselves: a rigid warp maximising OpenCV's enhanced correlation
+// coefficient (ECC; Evangelidis and Psarakis, PAMI 2008), started from where the robot's own steps put it.
+// What stays still in the image (the robot's shadow edge, lens dirt, a bumper) is left out of the alignment.
+
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+namespace groundslam {
+
+struct ImageAlignmentSettings {
+  int width_px = 160;               ///< images are reduced by a whole factor to this width or less before aligning
+  double highpass_fraction = 0.08;  ///< background light removed: a Gaussian blur this share of the reduced width
+  int max_iterations = 50;          ///< ECC iterations per start
+  /// A neighbourhood (7 x 7 reduced pixels) that correlates at least this well with itself at the same place
+  /// in the other image stayed still while the robot moved: it is not ground and is left out.
+  double still_correlation = 0.8;
+  /// Starts this far (reduced pixels) from the best solution must come back to it: a solution that depends on
+  /// where the alignment started is not a measurement.
+  double probe_px = 3.0;
+};
+
+/// An image as the alignment uses it: reduced, its background light removed (CV_32F).
+struct AlignmentImage {
+  cv::Mat pixels;
+  double scale = 1.0;  ///< original image pixels per pixel of `pixels` (the decoder's and our reduction)
+};
+
+/// `gray` (8-bit) was already reduced `reduced_by` times from the original image (a decoder's reduction).
+AlignmentImage alignmentImage(const cv::Mat& gray, const ImageAlignmentSettings& settings, int reduced_by = 1);
+
+/// The result of aligning two images; "did not converge" is a field, not an exception.
+struct ImageAlignment {
+  bool converged = false;
+  cv::Matx23d W_previous_current = cv::Matx23d::eye();  ///< a pixel of the current image to the previous image's (original pixels)
+  double correlation = 0.0;  ///< ECC's correlation coefficient at the solution (1: identical after the warp)
+  double spread_px = 0.0;    ///< farthest any probe start ended from the solution (original pixels)
+  /// The same correlation with no motion at all: near `correlation`, the images do not tell the motion from rest
+  /// (what they show that is not left out as still, a lamp's glare, a shadow, moves with the camera).
+  double rest_correlation = 0.0;
+};
+
+/// 255 where the images may show moving ground, 0 where a textured neighbourhood looks the same at the same place
+/// in both images (settings.still_correlation) and more alike there than where the expected warp (current pixel to
+/// previous, pixels of these images) puts it: it moved with the camera.
+cv::Mat movingPixels(const cv::Mat& previous, const cv::Mat& current, const cv::Matx23d& W_expected, double still_correlation);
+
+/// The rigid warp of `current` onto `previous` (both alignmentImage()s of one size) from each start (original
+/// pixels, current to previous); the one of highest correlation, probed from settings.probe_px around it. The
+/// first start is the expected motion that still parts are told by (movingPixels).
+ImageAlignment alignImages(const AlignmentImage& previous, const AlignmentImage& current, const std::vector<cv::Matx23d>& starts,
+                           const ImageAlignmentSettings& settings);
+
+/// Turns of the image about `centre_px` (original pixels: where the robot's origin is seen, about which a turn on
+/// the spot turns the image) that make the two images most alike, tried every `step_deg` on images reduced four
+/// times more: the warps (current to previous, original pixels) of the turns whose correlation is a local best and
+/// within `margin` of the best one, best first. More than one: the floor looks alike turned several ways.
+std::vector<cv::Matx23d> turnCandidates(const AlignmentImage& previous, const AlignmentImage& current, const cv::Point2d& centre_px,
+                                        double step_deg, double margin);
+
+/// A warp between original pixels as one between pixels of images reduced `scale` times, and back.
+cv::Matx23d toReducedPixels(const cv::Matx23d& W, double scale);
+cv::Matx23d toOriginalPixels(const cv::Matx23d& W_reduced, double scale);
+
+}  // namespace groundslam

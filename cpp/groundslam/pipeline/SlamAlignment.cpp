@@ -1,0 +1,90 @@
+// Not in the paper: odometry by aligning the images themselves where a floor gives too few keypoints
+// (core/ImageAlignment.hpp); the rest of Slam is in Slam.cpp.
+#include <vector>
+
+#include "groundslam/pipeline/Slam.hpp"
+
+namespace groundslam {
+namespace {
+
+/// Pixels spread over the image (4 x 3, inside a tenth of its size from the border) that a warp is judged on.
+std::vector<Eigen::Vector2d> imageGrid(const CameraIntrinsics& k) {
+  std::vector<Eigen::Vector2d> pixels;
+  for (int row = 0; row < 3; ++row) {
+    for (int column = 0; column < 4; ++column) {
+      pixels.emplace_back(k.width * (0.1 + 0.8 * column / 3.0), k.height * (0.1 + 0.8 * row / 2.0));
+    }
+  }
+  return pixels;
+}
+
+cv::Matx23d warpFromPose(const Pose2& T) {
+  const double c = std::cos(T.theta), s = std::sin(T.theta);
+  return {c, -s, T.x, s, c, T.y};
+}
+
+}  // namespace
+
+cv::Matx23d Slam::imageWarpOf(const Pose2& T_prev_curr) const {
+  std::vector<Eigen::Vector2d> current_pixels, previous_pixels;
+  for (const Eigen::Vector2d& pixel : imageGrid(camera_.intrinsics())) {
+    const auto ground = camera_.pixelToGround(pixel);
+    if (!ground) continue;
+    const auto seen_before = camera_.groundToPixel(T_prev_curr * *ground);
+    if (!seen_before) continue;
+    current_pixels.push_back(pixel);
+    previous_pixels.push_back(*seen_before);
+  }
+  // A downward camera sees a rigid motion of the ground as a rigid motion of the image.
+  return warpFromPose(leastSquaresRigid(previous_pixels, current_pixels));
+}
+
+Pose2 Slam::groundMotionOf(const cv::Matx23d& W_previous_current) const {
+  std::vector<Eigen::Vector2d> current_ground, previous_ground;
+  for (const Eigen::Vector2d& pixel : imageGrid(camera_.intrinsics())) {
+    const cv::Vec2d seen_before = W_previous_current * cv::Vec3d(pixel.x(), pixel.y(), 1.0);
+    const auto current = camera_.pixelToGround(pixel);
+    const auto previous = camera_.pixelToGround(Eigen::Vector2d(seen_before[0], seen_before[1]));
+    if (!current || !previous) continue;
+    current_ground.push_back(*current);
+    previous_ground.push_back(*previous);
+  }
+  return leastSquaresRigid(previous_ground, current_ground);
+}
+
+std::optional<OdometryEdge> Slam::odometryByAlignment(const Keyframe& previous, const Keyframe& current,
+                                                      const AlignmentImage& alignment) const {
+  const OdometryChecks& checks = config_.odometry_checks;
+  if (!checks.align_images || previous_alignment_.pixels.empty() || alignment.pixels.empty()) return std::nullopt;
+  // Started where the robot's usual steps put the ground (at rest before any motion was measured).
+  std::vector<cv::Matx23d> starts;
+  for (const Pose2& step : last_good_odometry_ ? usualSteps() : std::vector<Pose2>{Pose2()}) starts.push_back(imageWarpOf(step));
+  const auto believable = [&](const ImageAlignment& a) {
+    // Explaining the images no better than rest is not a measurement of motion: the images' decorrelation at rest
+    // must be align_rest_ratio times that after the warp.
+    return a.converged && a.correlation >= checks.align_min_correlation && a.spread_px * ground_sample_m_ <= checks.align_max_spread_m &&
+           1.0 - a.rest_correlation >= checks.align_rest_ratio * (1.0 - a.correlation);
+  };
+  ImageAlignment aligned = alignImages(previous_alignment_, alignment, starts, alignment_settings_);
+  if (!believable(aligned)) {
+    // A turn on the spot the steps did not foresee (a sharp turn): started from the turn about the robot's origin
+    // that makes the images most alike, every 5 degrees, if no other comes within 0.1 of its correlation (a floor
+    // that looks alike turned several ways, bricks turned by half a turn, is not aligned).
+    const auto origin_px = camera_.groundToPixel(Eigen::Vector2d::Zero());
+    if (!origin_px) return std::nullopt;
+    const std::vector<cv::Matx23d> turns = turnCandidates(previous_alignment_, alignment, cv::Point2d(origin_px->x(), origin_px->y()), 5.0, 0.1);
+    if (turns.size() != 1) return std::nullopt;
+    aligned = alignImages(previous_alignment_, alignment, turns, alignment_settings_);
+    if (!believable(aligned)) return std::nullopt;
+  }
+  const Pose2 T_prev_curr = groundMotionOf(aligned.W_previous_current);
+  if (!plausibleMotion(T_prev_curr, previous.timestamp, current.timestamp)) return std::nullopt;
+  OdometryEdge edge;
+  edge.T_prev_curr = T_prev_curr;
+  const double sigma_m = checks.align_sigma_m, sigma_rad = checks.align_sigma_rad;
+  edge.covariance = Eigen::Vector3d(sigma_m * sigma_m, sigma_m * sigma_m, sigma_rad * sigma_rad).asDiagonal();
+  edge.aligned = true;
+  return edge;
+}
+
+}  // namespace groundslam
