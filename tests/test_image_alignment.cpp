@@ -8,6 +8,8 @@
 #include <opencv2/imgproc.hpp>
 
 #include "groundslam/core/ImageAlignment.hpp"
+#include "groundslam/eval/TrajectoryMetrics.hpp"
+#include "groundslam/io/VocabularyFile.hpp"
 #include "groundslam/pipeline/Slam.hpp"
 #include "groundslam/sim/Simulator.hpp"
 
@@ -167,12 +169,15 @@ TEST(ImageAlignment, WarpsConvertBetweenOriginalAndReducedPixelsExactly) {
 namespace {
 
 struct SmoothFloorRun {
-  int measured = 0, aligned = 0, failed = 0;
+  int measured = 0, aligned = 0, failed = 0, lost = 0;
+  int relocalized_at = -1;
   double worst_aligned_m = 0.0, worst_aligned_rad = 0.0, mean_aligned_rad = 0.0;
+  double ate_m = 0.0;
 };
 
-/// Odometry alone over a loop on a smooth floor (blobs 3 cm wide, 18 x 14 cm footprint), 1 cm per frame.
-SmoothFloorRun runSmoothFloor(bool align_images) {
+/// A loop on a smooth floor (blobs 3 cm wide, 18 x 14 cm footprint), 1 cm per frame: odometry alone, or with
+/// loop closure and frame `blank` covered (a blank image: tracking is lost there).
+SmoothFloorRun runSmoothFloor(bool align_images, bool loop_closure = false, int blank = -1) {
   sim::SimulationSettings s;
   s.path.kind = sim::PathKind::loop;
   s.path.frames = 60;
@@ -183,12 +188,19 @@ SmoothFloorRun runSmoothFloor(bool align_images) {
   const sim::SequenceSimulator simulator(s, smoothTexture(512, 12.0, 11));
   Config config;
   config.camera = cameraConfigOf(s.camera, s.mounting_height_m);
-  config.loop_closure.enabled = false;
+  config.loop_closure.enabled = loop_closure;
   config.odometry_checks.align_images = align_images;
-  Slam slam(config, nullptr);
+  Slam slam(config, loop_closure ? std::make_shared<const Vocabulary>(readVocabulary(std::string(GROUNDSLAM_SOURCE_DIR) +
+                                                                                     "/config/vocabulary/ground.gslmvoc"))
+                                 : nullptr);
   SmoothFloorRun run;
+  Trajectory truth;
   for (int i = 0; i < simulator.frameCount(); ++i) {
-    const FrameResult r = slam.process(simulator.renderFrame(i), i);
+    const cv::Mat image = i == blank ? cv::Mat(simulator.renderFrame(i).size(), CV_8U, cv::Scalar(128)) : simulator.renderFrame(i);
+    const FrameResult r = slam.process(image, i);
+    if (i != blank) truth.push_back({static_cast<double>(i), simulator.groundTruth()[size_t(i)]});
+    run.lost += r.status == FrameStatus::lost ? 1 : 0;
+    if (r.status == FrameStatus::relocalized && run.relocalized_at < 0) run.relocalized_at = i;
     if (i == 0) continue;
     const Pose2 expected = between(simulator.groundTruth()[size_t(i - 1)], simulator.groundTruth()[size_t(i)]);
     run.measured += measuredByOdometry(r.status) ? 1 : 0;
@@ -202,6 +214,8 @@ SmoothFloorRun runSmoothFloor(bool align_images) {
     run.mean_aligned_rad += off_rad;
   }
   run.mean_aligned_rad /= std::max(1, run.aligned);
+  slam.finish();
+  run.ate_m = evaluateTrajectory(truth, slam.trajectory()).metrics.ate_rmse_m;
   return run;
 }
 
@@ -222,4 +236,19 @@ TEST(ImageAlignment, OnASmoothFloorTheImagesAreAlignedWhereTheFeaturesFail) {
   EXPECT_LT(with.worst_aligned_m, 0.0025);
   EXPECT_LT(with.worst_aligned_rad, 2.0 * kDeg);
   EXPECT_LT(with.mean_aligned_rad, 0.5 * kDeg);
+}
+
+TEST(ImageAlignment, OnASmoothFloorTrackingLostAtABlankFrameIsBridgedToTheLastTrackedFrame) {
+  // Global localization needs features a smooth floor does not give: without the alignment, the robot stays lost
+  // after a covered frame; with it, frame 31 is aligned with frame 29 (two usual steps) and the segment joins.
+  const SmoothFloorRun without = runSmoothFloor(false, true, 30);
+  const SmoothFloorRun with = runSmoothFloor(true, true, 30);
+  EXPECT_LT(without.relocalized_at, 0);
+  EXPECT_EQ(with.relocalized_at, 31);
+  EXPECT_LE(with.lost, 1);
+  // The break costs nothing against the same run without it (measured: ATE 9.5 mm against 9.7 mm; the aligned
+  // motions' heading noise, 0.4 degrees a frame, is what a floor without loop closures keeps).
+  const SmoothFloorRun unbroken = runSmoothFloor(true, true);
+  EXPECT_LT(with.ate_m, unbroken.ate_m + 0.001);
+  EXPECT_LT(unbroken.ate_m, 0.012);
 }

@@ -149,8 +149,10 @@ FrameResult Slam::process(PreparedFrame prepared) {
   // stays still in the image is not ground: the places and the map get neither artifact cells nor still features.
   const Keyframe ground = groundOf(current, still);
   closeLoops(ground, result);
-  if (lost_) relocalize(ground, result);
-  else if (prior_frames_ > 0) closeLoopsOnPriorMap(ground, result);
+  if (lost_) {
+    relocalize(ground, result);
+    if (lost_) bridgeByAlignment(current, prepared.alignment, result);
+  } else if (prior_frames_ > 0) closeLoopsOnPriorMap(ground, result);
   optimiseIfDue(result, false);
 
   result.T_world_robot = graph_.poses().back();
@@ -160,6 +162,11 @@ FrameResult Slam::process(PreparedFrame prepared) {
     while (recent_.size() > 30) recent_.pop_front();
   }
   previous_ = std::move(current);
+  if (!lost_ && measured_.back()) {
+    tracked_alignment_ = prepared.alignment;  // shares the pixels: neither is changed
+    tracked_frame_ = frame;
+    tracked_time_ = prepared.timestamp;
+  }
   previous_alignment_ = std::move(prepared.alignment);
   result.times.total_ms = prepared.extract_ms + prepared.project_ms + total.lap();
   return result;
@@ -246,6 +253,10 @@ void Slam::relocalize(const Keyframe& current, FrameResult& result) {
                     informationFrom(candidate.covariance, config_.graph.min_sigma_m, config_.graph.min_sigma_rad), true});
     ++result.loop_closures;
   }
+  joinMap(result);
+}
+
+void Slam::joinMap(FrameResult& result) {
   // The frames since the loss snap into place: the whole graph is optimised now.
   segment_ = kMapSegment;
   for (size_t i = static_cast<size_t>(lost_since_); i < measured_.size(); ++i) measured_[i] = true;

@@ -110,6 +110,15 @@ class Slam {
   /// Where the features are too few: the motion from aligning the previous image with this one, started from the
   /// robot's usual steps (odometry.align_*), or nothing (pipeline/SlamAlignment.cpp).
   std::optional<OdometryEdge> odometryByAlignment(const Keyframe& previous, const Keyframe& current, const AlignmentImage& alignment) const;
+  /// An alignment that passes odometry.align_* (correlation, better than rest, probes' spread).
+  bool believable(const ImageAlignment& aligned) const;
+  /// Aligns from the usual steps, or failing that from the one turn on the spot that makes the images most alike.
+  std::optional<ImageAlignment> alignFromSteps(const AlignmentImage& before, const AlignmentImage& now, int steps) const;
+  /// Right after tracking was lost (within kBridgeFrames frames): the current image aligned with the last tracked
+  /// one joins the segment to the map, as a relocalization would (weak floors give global localization too little).
+  void bridgeByAlignment(const Keyframe& current, const AlignmentImage& alignment, FrameResult& result);
+  /// The current segment joins the map (a relocalization): its frames count as measured, the graph is optimised.
+  void joinMap(FrameResult& result);
   /// The pixel warp (current image to previous) a ground motion T_prev_curr makes, and the ground motion of a warp;
   /// both through the calibrated camera, over a grid of the image's pixels.
   cv::Matx23d imageWarpOf(const Pose2& T_prev_curr) const;
@@ -233,6 +242,10 @@ class Slam {
   PoseGraph graph_;
   std::optional<Keyframe> previous_;
   AlignmentImage previous_alignment_;  ///< the previous image as the alignment uses it (odometry.align_images)
+  AlignmentImage tracked_alignment_;   ///< the last tracked frame's, and its graph index and time (bridgeByAlignment)
+  int tracked_frame_ = -1;
+  double tracked_time_ = 0.0;
+  static constexpr int kBridgeFrames = 3;
   ImageAlignmentSettings alignment_settings_;
   std::optional<OdometryEdge> last_good_odometry_;
   /// The time between the two frames of last_good_odometry_; 0 after a failed frame (no speed to judge by).

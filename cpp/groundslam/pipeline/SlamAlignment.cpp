@@ -3,6 +3,7 @@
 #include <vector>
 
 #include "groundslam/pipeline/Slam.hpp"
+#include "groundslam/pipeline/StageTimer.hpp"
 
 namespace groundslam {
 namespace {
@@ -16,6 +17,11 @@ std::vector<Eigen::Vector2d> imageGrid(const CameraIntrinsics& k) {
     }
   }
   return pixels;
+}
+
+Eigen::Matrix3d alignmentCovariance(const OdometryChecks& checks) {
+  const double sigma_m = checks.align_sigma_m, sigma_rad = checks.align_sigma_rad;
+  return Eigen::Vector3d(sigma_m * sigma_m, sigma_m * sigma_m, sigma_rad * sigma_rad).asDiagonal();
 }
 
 cv::Matx23d warpFromPose(const Pose2& T) {
@@ -52,39 +58,68 @@ Pose2 Slam::groundMotionOf(const cv::Matx23d& W_previous_current) const {
   return leastSquaresRigid(previous_ground, current_ground);
 }
 
+bool Slam::believable(const ImageAlignment& aligned) const {
+  const OdometryChecks& checks = config_.odometry_checks;
+  // Explaining the images no better than rest is not a measurement of motion: the images' decorrelation at rest
+  // must be align_rest_ratio times that after the warp.
+  return aligned.converged && aligned.correlation >= checks.align_min_correlation &&
+         aligned.spread_px * ground_sample_m_ <= checks.align_max_spread_m &&
+         1.0 - aligned.rest_correlation >= checks.align_rest_ratio * (1.0 - aligned.correlation);
+}
+
+std::optional<ImageAlignment> Slam::alignFromSteps(const AlignmentImage& before, const AlignmentImage& now, int steps) const {
+  // Started where `steps` of the robot's usual steps put the ground (at rest before any motion was measured).
+  std::vector<cv::Matx23d> starts;
+  for (const Pose2& step : last_good_odometry_ ? usualSteps() : std::vector<Pose2>{Pose2()}) {
+    Pose2 motion;
+    for (int k = 0; k < steps; ++k) motion = motion * step;
+    starts.push_back(imageWarpOf(motion));
+  }
+  const ImageAlignment aligned = alignImages(before, now, starts, alignment_settings_);
+  if (believable(aligned)) return aligned;
+  // A turn on the spot the steps did not foresee (a sharp turn): started from the turn about the robot's origin
+  // that makes the images most alike, every 5 degrees, if no other comes within 0.1 of its correlation (a floor
+  // that looks alike turned several ways, bricks turned by half a turn, is not aligned).
+  const auto origin_px = camera_.groundToPixel(Eigen::Vector2d::Zero());
+  if (!origin_px) return std::nullopt;
+  const std::vector<cv::Matx23d> turns = turnCandidates(before, now, cv::Point2d(origin_px->x(), origin_px->y()), 5.0, 0.1);
+  if (turns.size() != 1) return std::nullopt;
+  const ImageAlignment turned = alignImages(before, now, turns, alignment_settings_);
+  if (believable(turned)) return turned;
+  return std::nullopt;
+}
+
 std::optional<OdometryEdge> Slam::odometryByAlignment(const Keyframe& previous, const Keyframe& current,
                                                       const AlignmentImage& alignment) const {
   const OdometryChecks& checks = config_.odometry_checks;
   if (!checks.align_images || previous_alignment_.pixels.empty() || alignment.pixels.empty()) return std::nullopt;
-  // Started where the robot's usual steps put the ground (at rest before any motion was measured).
-  std::vector<cv::Matx23d> starts;
-  for (const Pose2& step : last_good_odometry_ ? usualSteps() : std::vector<Pose2>{Pose2()}) starts.push_back(imageWarpOf(step));
-  const auto believable = [&](const ImageAlignment& a) {
-    // Explaining the images no better than rest is not a measurement of motion: the images' decorrelation at rest
-    // must be align_rest_ratio times that after the warp.
-    return a.converged && a.correlation >= checks.align_min_correlation && a.spread_px * ground_sample_m_ <= checks.align_max_spread_m &&
-           1.0 - a.rest_correlation >= checks.align_rest_ratio * (1.0 - a.correlation);
-  };
-  ImageAlignment aligned = alignImages(previous_alignment_, alignment, starts, alignment_settings_);
-  if (!believable(aligned)) {
-    // A turn on the spot the steps did not foresee (a sharp turn): started from the turn about the robot's origin
-    // that makes the images most alike, every 5 degrees, if no other comes within 0.1 of its correlation (a floor
-    // that looks alike turned several ways, bricks turned by half a turn, is not aligned).
-    const auto origin_px = camera_.groundToPixel(Eigen::Vector2d::Zero());
-    if (!origin_px) return std::nullopt;
-    const std::vector<cv::Matx23d> turns = turnCandidates(previous_alignment_, alignment, cv::Point2d(origin_px->x(), origin_px->y()), 5.0, 0.1);
-    if (turns.size() != 1) return std::nullopt;
-    aligned = alignImages(previous_alignment_, alignment, turns, alignment_settings_);
-    if (!believable(aligned)) return std::nullopt;
-  }
-  const Pose2 T_prev_curr = groundMotionOf(aligned.W_previous_current);
+  const auto aligned = alignFromSteps(previous_alignment_, alignment, 1);
+  if (!aligned) return std::nullopt;
+  const Pose2 T_prev_curr = groundMotionOf(aligned->W_previous_current);
   if (!plausibleMotion(T_prev_curr, previous.timestamp, current.timestamp)) return std::nullopt;
   OdometryEdge edge;
   edge.T_prev_curr = T_prev_curr;
-  const double sigma_m = checks.align_sigma_m, sigma_rad = checks.align_sigma_rad;
-  edge.covariance = Eigen::Vector3d(sigma_m * sigma_m, sigma_m * sigma_m, sigma_rad * sigma_rad).asDiagonal();
+  edge.covariance = alignmentCovariance(checks);
   edge.aligned = true;
   return edge;
+}
+
+void Slam::bridgeByAlignment(const Keyframe& current, const AlignmentImage& alignment, FrameResult& result) {
+  const OdometryChecks& checks = config_.odometry_checks;
+  const int frames_since = current.index - tracked_frame_;
+  if (!checks.align_images || tracked_frame_ < 0 || frames_since < 2 || frames_since > kBridgeFrames ||
+      tracked_alignment_.pixels.empty() || alignment.pixels.empty()) {
+    return;
+  }
+  StageTimer timer;
+  const auto aligned = alignFromSteps(tracked_alignment_, alignment, frames_since);
+  result.times.loop_ms += timer.lap();
+  if (!aligned) return;
+  const Pose2 T_tracked_current = groundMotionOf(aligned->W_previous_current);
+  if (!plausibleMotion(T_tracked_current, tracked_time_, current.timestamp)) return;
+  graph_.addEdge({tracked_frame_, current.index, T_tracked_current,
+                  informationFrom(alignmentCovariance(checks), config_.graph.min_sigma_m, config_.graph.min_sigma_rad), true});
+  joinMap(result);
 }
 
 }  // namespace groundslam
