@@ -50,6 +50,18 @@ std::optional<std::pair<cv::Matx23d, double>> eccFrom(const cv::Mat& previous, c
   }
 }
 
+/// ECC's correlation coefficient of two images over a mask: zero-mean, normalised (-1 when either is flat there
+/// or the mask holds fewer than `min_pixels`).
+double maskedCorrelation(const cv::Mat& a, const cv::Mat& b, const cv::Mat& mask, double min_pixels) {
+  cv::Scalar mean_a, std_a, mean_b, std_b;
+  cv::meanStdDev(a, mean_a, std_a, mask);
+  cv::meanStdDev(b, mean_b, std_b, mask);
+  const double n = cv::countNonZero(mask);
+  if (n <= min_pixels || !(std_a[0] > 0.0) || !(std_b[0] > 0.0)) return -1.0;
+  cv::Mat product = (a - mean_a[0]).mul(b - mean_b[0]);
+  return cv::sum(product.setTo(0.0, mask == 0))[0] / (n * std_a[0] * std_b[0]);
+}
+
 }  // namespace
 
 cv::Matx23d toReducedPixels(const cv::Matx23d& W, double scale) {
@@ -133,15 +145,8 @@ ImageAlignment alignImages(const AlignmentImage& previous, const AlignmentImage&
   }
   if (!best_reduced) return best;
   best.converged = true;
-  // ECC's correlation at rest: zero-mean images, over the pixels both show and the alignment used.
-  cv::Scalar mean_p, std_p, mean_c, std_c;
-  cv::meanStdDev(previous_ground, mean_p, std_p, moving);
-  cv::meanStdDev(current_ground, mean_c, std_c, moving);
-  const double n = cv::countNonZero(moving);
-  if (n > 0 && std_p[0] > 0.0 && std_c[0] > 0.0) {
-    cv::Mat product = (previous_ground - mean_p[0]).mul(current_ground - mean_c[0]);
-    best.rest_correlation = cv::sum(product.setTo(0.0, moving == 0))[0] / (n * std_p[0] * std_c[0]);
-  }
+  // ECC's correlation at rest, over the pixels the alignment used.
+  best.rest_correlation = maskedCorrelation(previous_ground, current_ground, moving, 0.0);
   best.W_previous_current = toOriginalPixels(*best_reduced, previous.scale);
   // Probes: from starts shifted around the solution, the alignment must come back to it.
   const double d = settings.probe_px;
@@ -178,16 +183,7 @@ std::vector<cv::Matx23d> turnCandidates(const AlignmentImage& previous, const Al
     cv::warpAffine(ones, inside, W, small, cv::INTER_NEAREST | cv::WARP_INVERSE_MAP);
     cv::Mat shown;
     cv::erode(inside, shown, cv::Mat::ones(3, 3, CV_8U));  // no interpolated border
-    cv::Scalar mean_t, std_t, mean_c, std_c;
-    cv::meanStdDev(turned, mean_t, std_t, shown);
-    cv::meanStdDev(c, mean_c, std_c, shown);
-    const double n = cv::countNonZero(shown);
-    double correlation = -1.0;
-    if (n > 0.25 * small.area() && std_t[0] > 0.0 && std_c[0] > 0.0) {
-      cv::Mat product = (turned - mean_t[0]).mul(c - mean_c[0]);
-      correlation = cv::sum(product.setTo(0.0, shown == 0))[0] / (n * std_t[0] * std_c[0]);
-    }
-    turns.emplace_back(correlation, W);
+    turns.emplace_back(maskedCorrelation(turned, c, shown, 0.25 * small.area()), W);
   }
   double best = -1.0;
   for (const auto& turn : turns) best = std::max(best, turn.first);
