@@ -29,6 +29,11 @@ GraphEdge informationFreeEdge(int from, int to, const Pose2& T_from_to) {
   return {from, to, T_from_to, Eigen::Vector3d(1e-4, 1e-4, 1e-4).asDiagonal(), false};
 }
 
+/// The fit had too little evidence (not a motion refused for its rivals or its speed).
+bool tooLittleEvidence(FitStatus status) {
+  return status == FitStatus::too_few_matches || status == FitStatus::too_few_inliers || status == FitStatus::degenerate;
+}
+
 /// diag(sigma_m^2, sigma_m^2, sigma_rad^2): uncertainty added to a motion's covariance.
 Eigen::Matrix3d sigmaCovariance(double sigma_m, double sigma_rad) {
   return Eigen::Vector3d(sigma_m * sigma_m, sigma_m * sigma_m, sigma_rad * sigma_rad).asDiagonal();
@@ -225,6 +230,7 @@ int Slam::addUnmeasuredMotion(const OdometryEdge& failed) {
 void Slam::startSegment(const OdometryEdge& failed) {
   // The relocalization edge, not this one, will decide where the new segment lies.
   const int to = addUnmeasuredMotion(failed);
+  bridgeable_loss_ = tooLittleEvidence(failed.fit_status) && !repeatedFloor(to);
   loop_closer_->trackingLost(graph_.poses());
   ever_lost_ = true;
   ++segment_;
@@ -442,7 +448,7 @@ OdometryEdge Slam::estimateOdometry(const Keyframe& previous, const Keyframe& cu
   // motion unlike the robot's steps, or one a rival repetition is nearer to, is judged by them below: after a
   // gap two frames long the matches say the robot stepped back by a tile minus three steps, without a rival.
   if (!fit.rivals.empty()) last_rival_frame_ = current.index;
-  const bool repeated_floor = last_rival_frame_ >= 0 && current.index - last_rival_frame_ <= kRepeatedFloorFrames;
+  const bool repeated_floor = repeatedFloor(current.index);
   if (fit.ok() && repeated_floor && doubtedByTheSteps(fit, previous, current)) fit.status = FitStatus::implausible_motion;
   // Not in the paper: refused for its rivals or its speed on a repeated floor, the fit and its rivals are
   // judged by where the robot was going.
@@ -454,8 +460,7 @@ OdometryEdge Slam::estimateOdometry(const Keyframe& previous, const Keyframe& cu
   }
 
   // Too little evidence (not a motion refused for its rivals or its speed) where the overlap fell: a second look.
-  const bool too_little = fit.status == FitStatus::too_few_matches || fit.status == FitStatus::too_few_inliers ||
-                          fit.status == FitStatus::degenerate;
+  const bool too_little = tooLittleEvidence(fit.status);
   const bool overlap_fell = last_good_odometry_ && static_cast<double>(result.matches) <=
                                                        config_.odometry_checks.low_overlap_max_match_share * last_good_odometry_->matches;
   if (too_little && overlap_fell) {
@@ -468,8 +473,9 @@ OdometryEdge Slam::estimateOdometry(const Keyframe& previous, const Keyframe& cu
       return edge;
     }
   }
-  // Still too little evidence (a smooth floor, mortar lines): the images themselves are aligned.
-  if (too_little) {
+  // Still too little evidence (a smooth floor, mortar lines): the images themselves are aligned. Not on a floor
+  // that repeats: started near the usual step, an alignment finds the repetition nearest to it.
+  if (too_little && !repeated_floor) {
     if (auto aligned = odometryByAlignment(previous, current, alignment)) {
       aligned->matches = result.matches;
       return *aligned;

@@ -254,6 +254,10 @@ class Slam {
   /// A floor is taken to repeat for this many frames after an odometry fit had a rival repetition.
   static constexpr int kRepeatedFloorFrames = 20;
   int last_rival_frame_ = -1;  ///< the last frame whose odometry fit had a rival
+  /// The floor repeats: one of the last kRepeatedFloorFrames odometry fits up to `frame` had a rival repetition.
+  bool repeatedFloor(int frame) const { return last_rival_frame_ >= 0 && frame - last_rival_frame_ <= kRepeatedFloorFrames; }
+  /// Tracking was lost for too little evidence on a floor that does not repeat: bridgeByAlignment may join it.
+  bool bridgeable_loss_ = false;
   std::deque<Pose2> recent_steps_;  ///< the last kRecentSteps good motions, a gap's shared among its steps
   size_t steps_since_turn_ = 0;     ///< good motions since the last sharp turn (recent_steps_ before it point elsewhere)
   std::optional<std::pair<Pose2, double>> before_turn_;  ///< the usual step before the last sharp turn, and its turn

@@ -107,7 +107,10 @@ std::optional<OdometryEdge> Slam::odometryByAlignment(const Keyframe& previous, 
 void Slam::bridgeByAlignment(const Keyframe& current, const AlignmentImage& alignment, FrameResult& result) {
   const OdometryChecks& checks = config_.odometry_checks;
   const int frames_since = current.index - tracked_frame_;
-  if (!checks.align_images || tracked_frame_ < 0 || frames_since < 2 || frames_since > kBridgeFrames ||
+  // Only a loss for too little evidence, on a floor that does not repeat (an alignment started near the usual
+  // steps finds the repetition nearest to them, and a loss there is a motion refused for its rivals).
+  if (!checks.align_images || !bridgeable_loss_ || repeatedFloor(current.index) || tracked_frame_ < 0 || frames_since < 2 ||
+      frames_since > kBridgeFrames ||
       tracked_alignment_.pixels.empty() || alignment.pixels.empty()) {
     return;
   }
