@@ -43,6 +43,10 @@ int lastPoseOf(const GraphEdge& edge) { return std::max(edge.from, edge.to); }
 
 }  // namespace
 
+Eigen::Matrix3d sigmaCovariance(double sigma_m, double sigma_rad) {
+  return Eigen::Vector3d(sigma_m * sigma_m, sigma_m * sigma_m, sigma_rad * sigma_rad).asDiagonal();
+}
+
 Eigen::Matrix3d informationFrom(const Eigen::Matrix3d& covariance, double min_sigma_m, double min_sigma_rad) {
   const Eigen::Matrix3d floored =
       covariance + Eigen::Vector3d(min_sigma_m * min_sigma_m, min_sigma_m * min_sigma_m, min_sigma_rad * min_sigma_rad)

@@ -56,6 +56,9 @@ class PoseGraph {
   bool edges_in_pose_order_ = true;  ///< max(from, to) never decreases along edges_
 };
 
+/// diag(sigma_m^2, sigma_m^2, sigma_rad^2): the covariance of independent x, y and heading errors.
+Eigen::Matrix3d sigmaCovariance(double sigma_m, double sigma_rad);
+
 /// Information matrix from a covariance, with a floor on the standard deviations (unmodelled errors).
 Eigen::Matrix3d informationFrom(const Eigen::Matrix3d& covariance, double min_sigma_m, double min_sigma_rad);
 

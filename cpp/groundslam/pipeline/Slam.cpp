@@ -34,11 +34,6 @@ bool tooLittleEvidence(FitStatus status) {
   return status == FitStatus::too_few_matches || status == FitStatus::too_few_inliers || status == FitStatus::degenerate;
 }
 
-/// diag(sigma_m^2, sigma_m^2, sigma_rad^2): uncertainty added to a motion's covariance.
-Eigen::Matrix3d sigmaCovariance(double sigma_m, double sigma_rad) {
-  return Eigen::Vector3d(sigma_m * sigma_m, sigma_m * sigma_m, sigma_rad * sigma_rad).asDiagonal();
-}
-
 }  // namespace
 
 Slam::Slam(const Config& config, std::shared_ptr<const Vocabulary> vocabulary)

@@ -19,11 +19,6 @@ std::vector<Eigen::Vector2d> imageGrid(const CameraIntrinsics& k) {
   return pixels;
 }
 
-Eigen::Matrix3d alignmentCovariance(const OdometryChecks& checks) {
-  const double sigma_m = checks.align_sigma_m, sigma_rad = checks.align_sigma_rad;
-  return Eigen::Vector3d(sigma_m * sigma_m, sigma_m * sigma_m, sigma_rad * sigma_rad).asDiagonal();
-}
-
 cv::Matx23d warpFromPose(const Pose2& T) {
   const double c = std::cos(T.theta), s = std::sin(T.theta);
   return {c, -s, T.x, s, c, T.y};
@@ -99,7 +94,7 @@ std::optional<OdometryEdge> Slam::odometryByAlignment(const Keyframe& previous, 
   if (!plausibleMotion(T_prev_curr, previous.timestamp, current.timestamp)) return std::nullopt;
   OdometryEdge edge;
   edge.T_prev_curr = T_prev_curr;
-  edge.covariance = alignmentCovariance(checks);
+  edge.covariance = sigmaCovariance(checks.align_sigma_m, checks.align_sigma_rad);
   edge.aligned = true;
   return edge;
 }
@@ -121,7 +116,7 @@ void Slam::bridgeByAlignment(const Keyframe& current, const AlignmentImage& alig
   const Pose2 T_tracked_current = groundMotionOf(aligned->W_previous_current);
   if (!plausibleMotion(T_tracked_current, tracked_time_, current.timestamp)) return;
   graph_.addEdge({tracked_frame_, current.index, T_tracked_current,
-                  informationFrom(alignmentCovariance(checks), config_.graph.min_sigma_m, config_.graph.min_sigma_rad), true});
+                  informationFrom(sigmaCovariance(checks.align_sigma_m, checks.align_sigma_rad), config_.graph.min_sigma_m, config_.graph.min_sigma_rad), true});
   joinMap(result);
 }
 
