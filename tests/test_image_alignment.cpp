@@ -34,6 +34,30 @@ cv::Mat smoothTexture(int size, double blur_px, std::uint64_t seed) {
   return texture;
 }
 
+/// A floor of bricks (`brick_px` x 2 `brick_px`, rows offset by half a brick, dark mortar 3 pixels wide, each brick
+/// a little lighter or darker, faint blotches) blurred: its few corners are the mortar's, and most keypoints lie
+/// on its edges.
+cv::Mat brickTexture(int size, int brick_px, std::uint64_t seed) {
+  cv::Mat floor = smoothTexture(size, 6.0, seed);
+  floor.convertTo(floor, CV_32F, 0.18, 105.0);
+  std::mt19937_64 rng(seed + 1);
+  std::uniform_real_distribution<float> shade(-12.0f, 12.0f);
+  std::uniform_int_distribution<int> length(3 * brick_px / 2, 5 * brick_px / 2);
+  for (int top = 0; top < size; top += brick_px) {
+    for (int left = -length(rng) / 2; left < size;) {
+      const int brick_length = length(rng);
+      const cv::Rect brick = cv::Rect(left, top, brick_length, brick_px) & cv::Rect(0, 0, size, size);
+      floor(brick) += shade(rng);
+      cv::rectangle(floor, brick, cv::Scalar(60.0), 3);
+      left += brick_length;
+    }
+  }
+  cv::GaussianBlur(floor, floor, cv::Size(0, 0), 2.0);
+  cv::Mat texture;
+  floor.convertTo(texture, CV_8U);
+  return texture;
+}
+
 cv::Matx23d rigidWarp(double theta_rad, double tx, double ty) {
   return {std::cos(theta_rad), -std::sin(theta_rad), tx, std::sin(theta_rad), std::cos(theta_rad), ty};
 }
@@ -219,6 +243,73 @@ SmoothFloorRun runSmoothFloor(bool align_images, bool loop_closure = false, int 
 }
 
 }  // namespace
+
+struct WeakFitRun {
+  int ok = 0, ok_off = 0, aligned = 0, aligned_off = 0;
+  double ok_heading_error_rad = 0.0;        ///< summed over ok frames
+  double measured_heading_error_rad = 0.0;  ///< summed over ok and aligned frames
+};
+
+/// Odometry alone on a floor of bricks, 1 cm per frame; a fit with fewer than `check_below` inliers is checked.
+WeakFitRun runBrickFloor(int check_below, sim::PathKind path, std::uint64_t seed) {
+  sim::SimulationSettings s;
+  s.path.kind = path;
+  s.path.frames = 120;
+  s.path.laps = 1;
+  s.photometry.noise_sigma = 2.0;
+  s.user_texture_width_m = 0.6;
+  s.seed = seed;
+  const sim::SequenceSimulator simulator(s, brickTexture(512, 24, seed));
+  Config config;
+  config.camera = cameraConfigOf(s.camera, s.mounting_height_m);
+  config.loop_closure.enabled = false;
+  config.odometry_checks.align_check_below_inliers = check_below;
+  Slam slam(config, nullptr);
+  WeakFitRun run;
+  for (int i = 0; i < simulator.frameCount(); ++i) {
+    const FrameResult r = slam.process(simulator.renderFrame(i), i);
+    if (i == 0) continue;
+    const Pose2 expected = between(simulator.groundTruth()[size_t(i - 1)], simulator.groundTruth()[size_t(i)]);
+    const double off_m = (r.odometry.translation() - expected.translation()).norm();
+    const double off_rad = std::abs(wrapAngle(r.odometry.theta - expected.theta));
+    const bool off = off_m > 0.005 || off_rad > 0.5 * kDeg;
+    if (r.status == FrameStatus::ok) {
+      ++run.ok;
+      run.ok_off += off ? 1 : 0;
+      run.ok_heading_error_rad += off_rad;
+    } else if (r.status == FrameStatus::aligned) {
+      ++run.aligned;
+      run.aligned_off += off ? 1 : 0;
+    }
+    if (r.status == FrameStatus::ok || r.status == FrameStatus::aligned) run.measured_heading_error_rad += off_rad;
+  }
+  return run;
+}
+
+TEST(ImageAlignment, OnABrickFloorAFitTheImagesContradictAndTheMatchesCannotTellGivesWayToTheAlignment) {
+  // Loops on two floors of blurred bricks: most keypoints lie on mortar lines, and a fit of a few dozen of them can
+  // be half a degree off. Checked by the images (fits under 60 inliers), such frames say `aligned` with the
+  // images' motion. Measured, without / with the check: ok frames off by 5 mm or 0.5 degrees 2 + 2 / 0 + 0; heading
+  // error summed over the ok and aligned frames 14.7 + 16.3 / 11.0 + 12.5 degrees; no aligned frame off.
+  int ok_off_without = 0, ok_off_with = 0, aligned_off_with = 0, aligned_with = 0, aligned_without = 0;
+  double heading_without = 0.0, heading_with = 0.0;
+  for (const std::uint64_t seed : {5u, 8u}) {
+    const WeakFitRun without = runBrickFloor(0, sim::PathKind::loop, seed);
+    const WeakFitRun with = runBrickFloor(60, sim::PathKind::loop, seed);
+    ok_off_without += without.ok_off;
+    ok_off_with += with.ok_off;
+    aligned_without += without.aligned;
+    aligned_with += with.aligned;
+    aligned_off_with += with.aligned_off;
+    heading_without += without.measured_heading_error_rad;
+    heading_with += with.measured_heading_error_rad;
+  }
+  EXPECT_GE(ok_off_without, 2);
+  EXPECT_EQ(ok_off_with, 0);
+  EXPECT_GE(aligned_with, aligned_without + 10);
+  EXPECT_EQ(aligned_off_with, 0);
+  EXPECT_LT(heading_with, 0.85 * heading_without);
+}
 
 TEST(ImageAlignment, OnASmoothFloorTheImagesAreAlignedWhereTheFeaturesFail) {
   const SmoothFloorRun without = runSmoothFloor(false);

@@ -92,6 +92,18 @@ struct OdometryChecks {
   double align_max_spread_m = 0.002;
   double align_sigma_m = 0.005;
   double align_sigma_rad = 0.005;
+  /// A fit with fewer inliers than this is checked by aligning the images from its motion: an alignment believed
+  /// as above that ends more than align_check_m or align_check_rad away replaces it (the frame says `aligned`)
+  /// when the fit's matches support it nearly as well: at least align_check_support times as many of them lie
+  /// within align_check_radius_m of where it puts them as of where the fit does. On weak floors (mortar lines, a
+  /// blurred photo) a few dozen keypoints often sit on edges that place them well only across the edge, and such
+  /// a fit can be a degree off; on a fine texture the reduced images blur, the matches refute a wrong alignment.
+  /// 0: never checked.
+  int align_check_below_inliers = 60;
+  double align_check_m = 0.002;
+  double align_check_rad = 0.005;
+  double align_check_radius_m = 0.001;
+  double align_check_support = 0.75;
   /// A turn moves the ground by the camera's tilt error too: a tilt off by delta shifts every ground point by
   /// height * delta, and a turn by theta turns that shift into a translation error of 2 sin(theta / 2) * height *
   /// delta. One pair of views does not show the absolute tilt, so with delta = outdoor.tilt_prior_deg (the mount's
@@ -272,6 +284,11 @@ void visitConfigFields(Config_& c, Visitor&& v) {
   v("odometry", "align_max_spread_m", c.odometry_checks.align_max_spread_m, kPositive);
   v("odometry", "align_sigma_m", c.odometry_checks.align_sigma_m, kNonNegative);
   v("odometry", "align_sigma_rad", c.odometry_checks.align_sigma_rad, kNonNegative);
+  v("odometry", "align_check_below_inliers", c.odometry_checks.align_check_below_inliers, Range{0, 1000000});
+  v("odometry", "align_check_m", c.odometry_checks.align_check_m, kNonNegative);
+  v("odometry", "align_check_rad", c.odometry_checks.align_check_rad, kNonNegative);
+  v("odometry", "align_check_radius_m", c.odometry_checks.align_check_radius_m, kPositive);
+  v("odometry", "align_check_support", c.odometry_checks.align_check_support, kNonNegative);
   v("odometry", "sharp_turn_lever_m", c.odometry_checks.sharp_turn_lever_m, kNonNegative);
   v("odometry", "gap_min_steps", c.odometry_checks.gap_min_steps, kNonNegative);
   v("odometry", "repetition_max_steps", c.odometry_checks.repetition_max_steps, Range{0, 1000});

@@ -476,6 +476,15 @@ OdometryEdge Slam::estimateOdometry(const Keyframe& previous, const Keyframe& cu
       return *aligned;
     }
   }
+  // A fit on a few dozen keypoints is checked by aligning the images from its motion (not on a floor that
+  // repeats: there the fit's rivals already judge it).
+  if (fit.ok() && !repeated_floor) {
+    if (auto checked = checkedByAlignment(fit.T_target_source, fit.inliers, used, previous, current, alignment)) {
+      result.times.fit_ms += timer.lap();
+      checked->matches = result.matches;
+      return *checked;
+    }
+  }
   OdometryEdge edge{fit.T_target_source, fit.covariance, result.matches, fit.inliers, fit.status, false, std::move(used),
                     fit.rms_residual_m};
   return fit.ok() ? edge : fallbackOdometry(edge);

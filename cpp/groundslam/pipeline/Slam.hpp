@@ -110,6 +110,10 @@ class Slam {
   /// Where the features are too few: the motion from aligning the previous image with this one, started from the
   /// robot's usual steps (odometry.align_*), or nothing (pipeline/SlamAlignment.cpp).
   std::optional<OdometryEdge> odometryByAlignment(const Keyframe& previous, const Keyframe& current, const AlignmentImage& alignment) const;
+  /// A fit with fewer than odometry.align_check_below_inliers inliers, checked by aligning the images from its motion:
+  /// the aligned motion where a believable alignment ends farther than align_check_m / _rad away, else nothing.
+  std::optional<OdometryEdge> checkedByAlignment(const Pose2& fitted, int inliers, const std::vector<Match>& used,
+                                                 const Keyframe& previous, const Keyframe& current, const AlignmentImage& alignment) const;
   /// An alignment that passes odometry.align_* (correlation, better than rest, probes' spread).
   bool believable(const ImageAlignment& aligned) const;
   /// Aligns from the usual steps, or failing that from the one turn on the spot that makes the images most alike.

@@ -1,5 +1,6 @@
 // Not in the paper: odometry by aligning the images themselves where a floor gives too few keypoints
 // (core/ImageAlignment.hpp); the rest of Slam is in Slam.cpp.
+#include <algorithm>
 #include <vector>
 
 #include "groundslam/pipeline/Slam.hpp"
@@ -95,6 +96,40 @@ std::optional<OdometryEdge> Slam::odometryByAlignment(const Keyframe& previous, 
   OdometryEdge edge;
   edge.T_prev_curr = T_prev_curr;
   edge.covariance = sigmaCovariance(checks.align_sigma_m, checks.align_sigma_rad);
+  edge.aligned = true;
+  return edge;
+}
+
+std::optional<OdometryEdge> Slam::checkedByAlignment(const Pose2& fitted, int inliers, const std::vector<Match>& used,
+                                                     const Keyframe& previous, const Keyframe& current,
+                                                     const AlignmentImage& alignment) const {
+  const OdometryChecks& checks = config_.odometry_checks;
+  if (!checks.align_images || inliers >= checks.align_check_below_inliers || previous_alignment_.pixels.empty() ||
+      alignment.pixels.empty()) {
+    return std::nullopt;
+  }
+  const ImageAlignment aligned = alignImages(previous_alignment_, alignment, {imageWarpOf(fitted)}, alignment_settings_);
+  if (!believable(aligned)) return std::nullopt;
+  const Pose2 T_prev_curr = groundMotionOf(aligned.W_previous_current);
+  const Pose2 difference = fitted.inverse() * T_prev_curr;
+  if (difference.translation().norm() <= checks.align_check_m && std::abs(difference.theta) <= checks.align_check_rad) return std::nullopt;
+  // The images disagree with the fit. Where the keypoints cannot tell the two motions apart (they sit on edges that
+  // place them only across the edge) the images decide; where the keypoints refute the alignment (a fine
+  // texture the reduced images blur away) the fit stands.
+  const auto supporting = [&](const Pose2& T) {
+    return std::count_if(used.begin(), used.end(), [&](const Match& m) {
+      const Eigen::Vector2d& p = current.features.points[static_cast<size_t>(m.query)];
+      return (T * p - previous.features.points[static_cast<size_t>(m.train)]).norm() <= checks.align_check_radius_m;
+    });
+  };
+  if (static_cast<double>(supporting(T_prev_curr)) < checks.align_check_support * static_cast<double>(supporting(fitted))) {
+    return std::nullopt;
+  }
+  if (!plausibleMotion(T_prev_curr, previous.timestamp, current.timestamp)) return std::nullopt;
+  OdometryEdge edge;
+  edge.T_prev_curr = T_prev_curr;
+  edge.covariance = sigmaCovariance(checks.align_sigma_m, checks.align_sigma_rad);
+  edge.inliers = inliers;
   edge.aligned = true;
   return edge;
 }
