@@ -97,6 +97,7 @@ RunProgress runInto(const std::string& folder, const RunOptions& o, const Datase
   std::cout << "processed " << results.size() << " of " << total << " frames: " << measured << " measured, "
             << countStatus(results, FrameStatus::low_overlap) << " measured at low overlap (less certain), "
             << countStatus(results, FrameStatus::aligned) << " measured by aligning the images (too few features; less certain), "
+            << countStatus(results, FrameStatus::unconfirmed) << " measured from few keypoints the images did not confirm (less certain), "
             << countStatus(results, FrameStatus::sharp_turn) << " measured across a sharp turn (translation less certain), "
             << countStatus(results, FrameStatus::gap) << " measured across dropped frames (less certain), "
             << countStatus(results, FrameStatus::fallback) << " with fallback odometry (pose assumed from earlier motion), "

@@ -104,6 +104,11 @@ struct OdometryChecks {
   double align_check_rad = 0.005;
   double align_check_radius_m = 0.001;
   double align_check_support = 0.75;
+  /// A checked fit with fewer inliers than this that the images neither confirm (within align_check_m / _rad)
+  /// nor replace stands, less certain: the frame says `unconfirmed` and align_sigma_* are added to its edge's
+  /// standard deviations (a fit of a dozen or two keypoints on a weak floor is a degree off one time in ten).
+  /// 0: never.
+  int align_confirm_below_inliers = 30;
   /// A turn moves the ground by the camera's tilt error too: a tilt off by delta shifts every ground point by
   /// height * delta, and a turn by theta turns that shift into a translation error of 2 sin(theta / 2) * height *
   /// delta. One pair of views does not show the absolute tilt, so with delta = outdoor.tilt_prior_deg (the mount's
@@ -289,6 +294,7 @@ void visitConfigFields(Config_& c, Visitor&& v) {
   v("odometry", "align_check_rad", c.odometry_checks.align_check_rad, kNonNegative);
   v("odometry", "align_check_radius_m", c.odometry_checks.align_check_radius_m, kPositive);
   v("odometry", "align_check_support", c.odometry_checks.align_check_support, kNonNegative);
+  v("odometry", "align_confirm_below_inliers", c.odometry_checks.align_confirm_below_inliers, Range{0, 1000000});
   v("odometry", "sharp_turn_lever_m", c.odometry_checks.sharp_turn_lever_m, kNonNegative);
   v("odometry", "gap_min_steps", c.odometry_checks.gap_min_steps, kNonNegative);
   v("odometry", "repetition_max_steps", c.odometry_checks.repetition_max_steps, Range{0, 1000});

@@ -123,6 +123,7 @@ FrameResult Slam::process(PreparedFrame prepared) {
                     : odometry.fallback   ? FrameStatus::fallback
                     : odometry.low_overlap ? FrameStatus::low_overlap
                     : odometry.aligned ? FrameStatus::aligned
+                    : odometry.unconfirmed ? FrameStatus::unconfirmed
                     : sharpTurn(odometry.T_prev_curr) ? FrameStatus::sharp_turn
                     : spansGap(steps) ? FrameStatus::gap
                                           : FrameStatus::ok;
@@ -476,17 +477,22 @@ OdometryEdge Slam::estimateOdometry(const Keyframe& previous, const Keyframe& cu
       return *aligned;
     }
   }
-  // A fit on a few dozen keypoints is checked by aligning the images from its motion (not on a floor that
-  // repeats: there the fit's rivals already judge it).
-  if (fit.ok() && !repeated_floor) {
-    if (auto checked = checkedByAlignment(fit.T_target_source, fit.inliers, used, previous, current, alignment)) {
-      result.times.fit_ms += timer.lap();
-      checked->matches = result.matches;
-      return *checked;
-    }
+  // A fit on a few dozen keypoints is checked by aligning the images from its motion.
+  const FitCheck check = fit.ok() ? checkedByAlignment(fit.T_target_source, fit.inliers, used, previous, current, alignment, repeated_floor)
+                                  : FitCheck{};
+  result.times.fit_ms += timer.lap();
+  if (check.outcome == FitCheck::Outcome::replaced) {
+    OdometryEdge replaced = check.replacement;
+    replaced.matches = result.matches;
+    return replaced;
   }
   OdometryEdge edge{fit.T_target_source, fit.covariance, result.matches, fit.inliers, fit.status, false, std::move(used),
                     fit.rms_residual_m};
+  // Few inliers the images did not confirm: the motion stands, less certain (as the images' own would be).
+  if (check.outcome == FitCheck::Outcome::unconfirmed && fit.inliers < config_.odometry_checks.align_confirm_below_inliers) {
+    edge.unconfirmed = true;
+    edge.covariance += sigmaCovariance(config_.odometry_checks.align_sigma_m, config_.odometry_checks.align_sigma_rad);
+  }
   return fit.ok() ? edge : fallbackOdometry(edge);
 }
 

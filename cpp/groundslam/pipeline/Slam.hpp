@@ -50,6 +50,7 @@ struct OdometryEdge {
   double rms_residual_m = 0.0;  ///< of the fit's inliers
   bool low_overlap = false;  ///< measured by the second, looser matching (OdometryChecks::low_overlap_ratio)
   bool aligned = false;      ///< measured by aligning the two images (OdometryChecks::align_images)
+  bool unconfirmed = false;  ///< fitted on fewer than align_confirm_below_inliers inliers the images did not confirm
 };
 
 class Slam {
@@ -112,8 +113,14 @@ class Slam {
   std::optional<OdometryEdge> odometryByAlignment(const Keyframe& previous, const Keyframe& current, const AlignmentImage& alignment) const;
   /// A fit with fewer than odometry.align_check_below_inliers inliers, checked by aligning the images from its motion:
   /// the aligned motion where a believable alignment ends farther than align_check_m / _rad away, else nothing.
-  std::optional<OdometryEdge> checkedByAlignment(const Pose2& fitted, int inliers, const std::vector<Match>& used,
-                                                 const Keyframe& previous, const Keyframe& current, const AlignmentImage& alignment) const;
+  /// What the images say of a fit: not checked (enough inliers), it agrees, the aligned motion replaces it, or nothing.
+  struct FitCheck {
+    enum class Outcome { not_checked, confirmed, replaced, unconfirmed } outcome = Outcome::not_checked;
+    OdometryEdge replacement;  ///< when replaced
+  };
+  /// On a floor that repeats the images only confirm (its rivals judge the fit; an alignment is not to replace it).
+  FitCheck checkedByAlignment(const Pose2& fitted, int inliers, const std::vector<Match>& used, const Keyframe& previous,
+                              const Keyframe& current, const AlignmentImage& alignment, bool repeated_floor) const;
   /// An alignment that passes odometry.align_* (correlation, better than rest, probes' spread).
   bool believable(const ImageAlignment& aligned) const;
   /// Aligns from the usual steps, or failing that from the one turn on the spot that makes the images most alike.

@@ -100,22 +100,27 @@ std::optional<OdometryEdge> Slam::odometryByAlignment(const Keyframe& previous, 
   return edge;
 }
 
-std::optional<OdometryEdge> Slam::checkedByAlignment(const Pose2& fitted, int inliers, const std::vector<Match>& used,
-                                                     const Keyframe& previous, const Keyframe& current,
-                                                     const AlignmentImage& alignment) const {
+Slam::FitCheck Slam::checkedByAlignment(const Pose2& fitted, int inliers, const std::vector<Match>& used, const Keyframe& previous,
+                                        const Keyframe& current, const AlignmentImage& alignment, bool repeated_floor) const {
   const OdometryChecks& checks = config_.odometry_checks;
+  FitCheck check;
   if (!checks.align_images || inliers >= checks.align_check_below_inliers || previous_alignment_.pixels.empty() ||
       alignment.pixels.empty()) {
-    return std::nullopt;
+    return check;
   }
+  check.outcome = FitCheck::Outcome::unconfirmed;
   const ImageAlignment aligned = alignImages(previous_alignment_, alignment, {imageWarpOf(fitted)}, alignment_settings_);
-  if (!believable(aligned)) return std::nullopt;
+  if (!believable(aligned)) return check;
   const Pose2 T_prev_curr = groundMotionOf(aligned.W_previous_current);
   const Pose2 difference = fitted.inverse() * T_prev_curr;
-  if (difference.translation().norm() <= checks.align_check_m && std::abs(difference.theta) <= checks.align_check_rad) return std::nullopt;
+  if (difference.translation().norm() <= checks.align_check_m && std::abs(difference.theta) <= checks.align_check_rad) {
+    check.outcome = FitCheck::Outcome::confirmed;
+    return check;
+  }
+  if (repeated_floor) return check;
   // The images disagree with the fit. Where the keypoints cannot tell the two motions apart (they sit on edges that
   // place them only across the edge) the images decide; where the keypoints refute the alignment (a fine
-  // texture the reduced images blur away) the fit stands.
+  // texture the reduced images blur away) the fit stands, unconfirmed.
   const auto supporting = [&](const Pose2& T) {
     return std::count_if(used.begin(), used.end(), [&](const Match& m) {
       const Eigen::Vector2d& p = current.features.points[static_cast<size_t>(m.query)];
@@ -123,15 +128,15 @@ std::optional<OdometryEdge> Slam::checkedByAlignment(const Pose2& fitted, int in
     });
   };
   if (static_cast<double>(supporting(T_prev_curr)) < checks.align_check_support * static_cast<double>(supporting(fitted))) {
-    return std::nullopt;
+    return check;
   }
-  if (!plausibleMotion(T_prev_curr, previous.timestamp, current.timestamp)) return std::nullopt;
-  OdometryEdge edge;
-  edge.T_prev_curr = T_prev_curr;
-  edge.covariance = sigmaCovariance(checks.align_sigma_m, checks.align_sigma_rad);
-  edge.inliers = inliers;
-  edge.aligned = true;
-  return edge;
+  if (!plausibleMotion(T_prev_curr, previous.timestamp, current.timestamp)) return check;
+  check.outcome = FitCheck::Outcome::replaced;
+  check.replacement.T_prev_curr = T_prev_curr;
+  check.replacement.covariance = sigmaCovariance(checks.align_sigma_m, checks.align_sigma_rad);
+  check.replacement.inliers = inliers;
+  check.replacement.aligned = true;
+  return check;
 }
 
 void Slam::bridgeByAlignment(const Keyframe& current, const AlignmentImage& alignment, FrameResult& result) {
