@@ -111,14 +111,13 @@ class Slam {
   /// Where the features are too few: the motion from aligning the previous image with this one, started from the
   /// robot's usual steps (odometry.align_*), or nothing (pipeline/SlamAlignment.cpp).
   std::optional<OdometryEdge> odometryByAlignment(const Keyframe& previous, const Keyframe& current, const AlignmentImage& alignment) const;
-  /// A fit with fewer than odometry.align_check_below_inliers inliers, checked by aligning the images from its motion:
-  /// the aligned motion where a believable alignment ends farther than align_check_m / _rad away, else nothing.
   /// What the images say of a fit: not checked (enough inliers), it agrees, the aligned motion replaces it, or nothing.
   struct FitCheck {
     enum class Outcome { not_checked, confirmed, replaced, unconfirmed } outcome = Outcome::not_checked;
     OdometryEdge replacement;  ///< when replaced
   };
-  /// On a floor that repeats the images only confirm (its rivals judge the fit; an alignment is not to replace it).
+  /// A fit with fewer than odometry.align_check_below_inliers inliers, checked by aligning the images from its motion
+  /// (odometry.align_check_*). On a floor that repeats the images only confirm (its rivals judge the fit).
   FitCheck checkedByAlignment(const Pose2& fitted, int inliers, const std::vector<Match>& used, const Keyframe& previous,
                               const Keyframe& current, const AlignmentImage& alignment, bool repeated_floor) const;
   /// An alignment that passes odometry.align_* (correlation, better than rest, probes' spread).

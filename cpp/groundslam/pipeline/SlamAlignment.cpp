@@ -1,5 +1,5 @@
-// Not in the paper: odometry by aligning the images themselves where a floor gives too few keypoints
-// (core/ImageAlignment.hpp); the rest of Slam is in Slam.cpp.
+// Not in the paper: odometry by aligning the images themselves where a floor gives too few keypoints, and weak
+// fits checked by them (core/ImageAlignment.hpp); the rest of Slam is in Slam.cpp.
 #include <algorithm>
 #include <vector>
 
