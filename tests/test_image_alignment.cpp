@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <random>
+#include <utility>
 
 #include <gtest/gtest.h>
 #include <opencv2/imgproc.hpp>
@@ -192,6 +193,12 @@ TEST(ImageAlignment, WarpsConvertBetweenOriginalAndReducedPixelsExactly) {
 
 namespace {
 
+/// How far frame i's odometry motion is from the true one: metres, radians.
+std::pair<double, double> odometryError(const FrameResult& r, const sim::SequenceSimulator& simulator, int i) {
+  const Pose2 expected = between(simulator.groundTruth()[size_t(i - 1)], simulator.groundTruth()[size_t(i)]);
+  return {(r.odometry.translation() - expected.translation()).norm(), std::abs(wrapAngle(r.odometry.theta - expected.theta))};
+}
+
 struct SmoothFloorRun {
   int measured = 0, aligned = 0, failed = 0, lost = 0;
   int relocalized_at = -1;
@@ -226,13 +233,11 @@ SmoothFloorRun runSmoothFloor(bool align_images, bool loop_closure = false, int 
     run.lost += r.status == FrameStatus::lost ? 1 : 0;
     if (r.status == FrameStatus::relocalized && run.relocalized_at < 0) run.relocalized_at = i;
     if (i == 0) continue;
-    const Pose2 expected = between(simulator.groundTruth()[size_t(i - 1)], simulator.groundTruth()[size_t(i)]);
     run.measured += measuredByOdometry(r.status) ? 1 : 0;
     run.failed += r.status == FrameStatus::fallback ? 1 : 0;
     if (r.status != FrameStatus::aligned) continue;
     ++run.aligned;
-    const double off_m = (r.odometry.translation() - expected.translation()).norm();
-    const double off_rad = std::abs(wrapAngle(r.odometry.theta - expected.theta));
+    const auto [off_m, off_rad] = odometryError(r, simulator, i);
     run.worst_aligned_m = std::max(run.worst_aligned_m, off_m);
     run.worst_aligned_rad = std::max(run.worst_aligned_rad, off_rad);
     run.mean_aligned_rad += off_rad;
@@ -271,9 +276,7 @@ WeakFitRun runBrickFloor(int check_below, sim::PathKind path, std::uint64_t seed
   for (int i = 0; i < simulator.frameCount(); ++i) {
     const FrameResult r = slam.process(simulator.renderFrame(i), i);
     if (i == 0) continue;
-    const Pose2 expected = between(simulator.groundTruth()[size_t(i - 1)], simulator.groundTruth()[size_t(i)]);
-    const double off_m = (r.odometry.translation() - expected.translation()).norm();
-    const double off_rad = std::abs(wrapAngle(r.odometry.theta - expected.theta));
+    const auto [off_m, off_rad] = odometryError(r, simulator, i);
     const bool off = off_m > 0.005 || off_rad > 0.5 * kDeg;
     if (r.status == FrameStatus::ok) {
       ++run.ok;

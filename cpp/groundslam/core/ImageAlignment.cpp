@@ -164,9 +164,9 @@ ImageAlignment alignImages(const AlignmentImage& previous, const AlignmentImage&
 std::vector<cv::Matx23d> turnCandidates(const AlignmentImage& previous, const AlignmentImage& current, const cv::Point2d& centre_px,
                                         double step_deg, double margin) {
   if (previous.pixels.empty() || previous.pixels.size() != current.pixels.size() || !(step_deg > 0.0)) return {};
-  constexpr double kCoarse = 4.0;
+  constexpr int kCoarse = 4;
   cv::Mat p, c;
-  const cv::Size small(std::max(1, previous.pixels.cols / 4), std::max(1, previous.pixels.rows / 4));
+  const cv::Size small(std::max(1, previous.pixels.cols / kCoarse), std::max(1, previous.pixels.rows / kCoarse));
   cv::resize(previous.pixels, p, small, 0.0, 0.0, cv::INTER_AREA);
   cv::resize(current.pixels, c, small, 0.0, 0.0, cv::INTER_AREA);
   const double scale = previous.scale * kCoarse;

@@ -482,7 +482,7 @@ OdometryEdge Slam::estimateOdometry(const Keyframe& previous, const Keyframe& cu
                                   : FitCheck{};
   result.times.fit_ms += timer.lap();
   if (check.outcome == FitCheck::Outcome::replaced) {
-    OdometryEdge replaced = check.replacement;
+    OdometryEdge replaced = alignedEdge(check.aligned_motion);
     replaced.matches = result.matches;
     return replaced;
   }

@@ -114,12 +114,14 @@ class Slam {
   /// What the images say of a fit: not checked (enough inliers), it agrees, the aligned motion replaces it, or nothing.
   struct FitCheck {
     enum class Outcome { not_checked, confirmed, replaced, unconfirmed } outcome = Outcome::not_checked;
-    OdometryEdge replacement;  ///< when replaced
+    Pose2 aligned_motion;  ///< T_prev_curr the images measured, when replaced
   };
   /// A fit with fewer than odometry.align_check_below_inliers inliers, checked by aligning the images from its motion
   /// (odometry.align_check_*). On a floor that repeats the images only confirm (its rivals judge the fit).
   FitCheck checkedByAlignment(const Pose2& fitted, int inliers, const std::vector<Match>& used, const Keyframe& previous,
                               const Keyframe& current, const AlignmentImage& alignment, bool repeated_floor) const;
+  /// An edge measured by aligning the images: T_prev_curr with odometry.align_sigma_* as its covariance.
+  OdometryEdge alignedEdge(const Pose2& T_prev_curr) const;
   /// An alignment that passes odometry.align_* (correlation, better than rest, probes' spread).
   bool believable(const ImageAlignment& aligned) const;
   /// Aligns from the usual steps, or failing that from the one turn on the spot that makes the images most alike.

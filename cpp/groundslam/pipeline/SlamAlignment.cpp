@@ -93,9 +93,13 @@ std::optional<OdometryEdge> Slam::odometryByAlignment(const Keyframe& previous, 
   if (!aligned) return std::nullopt;
   const Pose2 T_prev_curr = groundMotionOf(aligned->W_previous_current);
   if (!plausibleMotion(T_prev_curr, previous.timestamp, current.timestamp)) return std::nullopt;
+  return alignedEdge(T_prev_curr);
+}
+
+OdometryEdge Slam::alignedEdge(const Pose2& T_prev_curr) const {
   OdometryEdge edge;
   edge.T_prev_curr = T_prev_curr;
-  edge.covariance = sigmaCovariance(checks.align_sigma_m, checks.align_sigma_rad);
+  edge.covariance = sigmaCovariance(config_.odometry_checks.align_sigma_m, config_.odometry_checks.align_sigma_rad);
   edge.aligned = true;
   return edge;
 }
@@ -132,10 +136,7 @@ Slam::FitCheck Slam::checkedByAlignment(const Pose2& fitted, int inliers, const 
   }
   if (!plausibleMotion(T_prev_curr, previous.timestamp, current.timestamp)) return check;
   check.outcome = FitCheck::Outcome::replaced;
-  check.replacement.T_prev_curr = T_prev_curr;
-  check.replacement.covariance = sigmaCovariance(checks.align_sigma_m, checks.align_sigma_rad);
-  check.replacement.inliers = inliers;
-  check.replacement.aligned = true;
+  check.aligned_motion = T_prev_curr;
   return check;
 }
 
