@@ -148,6 +148,10 @@ struct OdometryChecks {
   /// and the failing frames right after it: a floor that keeps losing the robot makes no map by starting again.
   /// 0: a lost segment is always relocalized.
   int restart_map_below_frames = 10;
+  /// right after tracking is lost for too little evidence on a floor that does not repeat, each frame up to this many
+  /// after the last tracked one is measured against it (its features, else the images aligned); one that is
+  /// joins the lost segment to the map (0: off)
+  int bridge_max_frames = 3;
 };
 
 /// Outdoors and on real robots: features that stay still in the image, and the camera's tilt and height per
@@ -306,6 +310,7 @@ void visitConfigFields(Config_& c, Visitor&& v) {
   v("odometry", "repetition_margin", c.odometry_checks.repetition_margin, Range{1.0, 1000.0});
   v("odometry", "repetition_support_ratio", c.odometry_checks.repetition_support_ratio, kNonNegative);
   v("odometry", "restart_map_below_frames", c.odometry_checks.restart_map_below_frames, Range{0, 1e9});
+  v("odometry", "bridge_max_frames", c.odometry_checks.bridge_max_frames, Range{0, 1000});
   v("odometry", "fallback_sigma_m", c.fallback.sigma_m, kPositive);
   v("odometry", "fallback_sigma_rad", c.fallback.sigma_rad, kPositive);
   v("loop_closure", "enabled", c.loop_closure.enabled, Range{});

@@ -152,7 +152,7 @@ FrameResult Slam::process(PreparedFrame prepared) {
   closeLoops(ground, result);
   if (lost_) {
     relocalize(ground, result);
-    if (lost_) bridgeByAlignment(current, prepared.alignment, result);
+    if (lost_) bridgeLoss(current, prepared.alignment, result);
   } else if (prior_frames_ > 0) closeLoopsOnPriorMap(ground, result);
   optimiseIfDue(result, false);
 
@@ -164,6 +164,7 @@ FrameResult Slam::process(PreparedFrame prepared) {
   }
   previous_ = std::move(current);
   if (!lost_ && measured_.back()) {
+    tracked_keyframe_ = previous_;
     tracked_alignment_ = prepared.alignment;  // shares the pixels: neither is changed
     tracked_frame_ = frame;
     tracked_time_ = prepared.timestamp;

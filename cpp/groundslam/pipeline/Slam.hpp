@@ -126,9 +126,16 @@ class Slam {
   bool believable(const ImageAlignment& aligned) const;
   /// Aligns from the usual steps, or failing that from the one turn on the spot that makes the images most alike.
   std::optional<ImageAlignment> alignFromSteps(const AlignmentImage& before, const AlignmentImage& now, int steps) const;
-  /// Right after tracking was lost (within kBridgeFrames frames): the current image aligned with the last tracked
-  /// one joins the segment to the map, as a relocalization would (weak floors give global localization too little).
-  void bridgeByAlignment(const Keyframe& current, const AlignmentImage& alignment, FrameResult& result);
+  /// Right after tracking was lost (within odometry.bridge_max_frames frames): the current frame measured against the last tracked
+  /// one joins the segment to the map, as a relocalization would (the map may not reach where the robot goes, and
+  /// weak floors give global localization too little). By its features first, else by aligning the images.
+  void bridgeLoss(const Keyframe& current, const AlignmentImage& alignment, FrameResult& result);
+  struct Bridge {
+    Pose2 T_tracked_current;
+    Eigen::Matrix3d covariance;
+  };
+  std::optional<Bridge> bridgeByFeatures(const Keyframe& current) const;
+  std::optional<Bridge> bridgeByAlignment(const Keyframe& current, const AlignmentImage& alignment) const;
   /// The current segment joins the map (a relocalization): its frames count as measured, the graph is optimised.
   void joinMap(FrameResult& result);
   /// The pixel warp (current image to previous) a ground motion T_prev_curr makes, and the ground motion of a warp;
@@ -254,10 +261,10 @@ class Slam {
   PoseGraph graph_;
   std::optional<Keyframe> previous_;
   AlignmentImage previous_alignment_;  ///< the previous image as the alignment uses it (odometry.align_images)
-  AlignmentImage tracked_alignment_;   ///< the last tracked frame's, and its graph index and time (bridgeByAlignment)
+  AlignmentImage tracked_alignment_;   ///< the last tracked frame's image, keyframe, graph index and time (bridgeLoss)
+  std::optional<Keyframe> tracked_keyframe_;
   int tracked_frame_ = -1;
   double tracked_time_ = 0.0;
-  static constexpr int kBridgeFrames = 3;
   ImageAlignmentSettings alignment_settings_;
   std::optional<OdometryEdge> last_good_odometry_;
   /// The time between the two frames of last_good_odometry_; 0 after a failed frame (no speed to judge by).
@@ -268,7 +275,7 @@ class Slam {
   int last_rival_frame_ = -1;  ///< the last frame whose odometry fit had a rival
   /// The floor repeats: one of the last kRepeatedFloorFrames odometry fits up to `frame` had a rival repetition.
   bool repeatedFloor(int frame) const { return last_rival_frame_ >= 0 && frame - last_rival_frame_ <= kRepeatedFloorFrames; }
-  /// Tracking was lost for too little evidence on a floor that does not repeat: bridgeByAlignment may join it.
+  /// Tracking was lost for too little evidence on a floor that does not repeat: bridgeLoss may join it.
   bool bridgeable_loss_ = false;
   std::deque<Pose2> recent_steps_;  ///< the last kRecentSteps good motions, a gap's shared among its steps
   size_t steps_since_turn_ = 0;     ///< good motions since the last sharp turn (recent_steps_ before it point elsewhere)

@@ -140,25 +140,4 @@ Slam::FitCheck Slam::checkedByAlignment(const Pose2& fitted, int inliers, const 
   return check;
 }
 
-void Slam::bridgeByAlignment(const Keyframe& current, const AlignmentImage& alignment, FrameResult& result) {
-  const OdometryChecks& checks = config_.odometry_checks;
-  const int frames_since = current.index - tracked_frame_;
-  // Only a loss for too little evidence, on a floor that does not repeat (an alignment started near the usual
-  // steps finds the repetition nearest to them, and a loss there is a motion refused for its rivals).
-  if (!checks.align_images || !bridgeable_loss_ || repeatedFloor(current.index) || tracked_frame_ < 0 || frames_since < 2 ||
-      frames_since > kBridgeFrames ||
-      tracked_alignment_.pixels.empty() || alignment.pixels.empty()) {
-    return;
-  }
-  StageTimer timer;
-  const auto aligned = alignFromSteps(tracked_alignment_, alignment, frames_since);
-  result.times.loop_ms += timer.lap();
-  if (!aligned) return;
-  const Pose2 T_tracked_current = groundMotionOf(aligned->W_previous_current);
-  if (!plausibleMotion(T_tracked_current, tracked_time_, current.timestamp)) return;
-  graph_.addEdge({tracked_frame_, current.index, T_tracked_current,
-                  informationFrom(sigmaCovariance(checks.align_sigma_m, checks.align_sigma_rad), config_.graph.min_sigma_m, config_.graph.min_sigma_rad), true});
-  joinMap(result);
-}
-
 }  // namespace groundslam
