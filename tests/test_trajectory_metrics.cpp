@@ -116,3 +116,23 @@ TEST(LoopClosureMetrics, NothingAcceptedIsNullNotPerfect) {
   // With no true candidate either, recall has nothing to measure.
   EXPECT_NE(loopMetricsToJson(summariseLoopClosures({}, {})).find("\"recall\": null"), std::string::npos);
 }
+
+TEST(LoopClosureMetrics, FootprintOverlapIsTheExactAreaAlongALane) {
+  // An 18 x 14 cm footprint, its border sampled as the camera model samples it (collinear points on every side).
+  std::vector<Eigen::Vector2d> footprint;
+  const Eigen::Vector2d corners[4] = {{-0.09, -0.07}, {0.09, -0.07}, {0.09, 0.07}, {-0.09, 0.07}};
+  for (int side = 0; side < 4; ++side) {
+    for (int k = 0; k < 8; ++k) footprint.push_back(corners[side] + (corners[(side + 1) % 4] - corners[side]) * (k / 8.0));
+  }
+  // Two frames 9 cm apart on a lawnmower lane driven at 179.96 degrees (the long edges on nearly the same lines:
+  // OpenCV's intersectConvexConvex gave 0 here and the right loop closure between them counted as wrong).
+  const double heading = 2.0 * std::atan2(0.999999935010, 0.000360526857);
+  const Pose2 a(0.098779609609, 0.082128713845, heading), b(0.008779633005, 0.082193608675, heading);
+  EXPECT_NEAR(footprintOverlap(footprint, a, b), 0.09 * 0.14, 1e-6);
+  EXPECT_NEAR(footprintOverlap(footprint, a, a), 0.18 * 0.14, 1e-9);
+  // Turned a quarter on the spot: the 14 x 14 cm square they share.
+  EXPECT_NEAR(footprintOverlap(footprint, Pose2(0.0, 0.0, 0.0), Pose2(0.0, 0.0, M_PI / 2)), 0.14 * 0.14, 1e-9);
+  // Side by side, 18 cm apart along x: touching, no overlap; 19 cm: none.
+  EXPECT_NEAR(footprintOverlap(footprint, Pose2(0.0, 0.0, 0.0), Pose2(0.18, 0.0, 0.0)), 0.0, 1e-12);
+  EXPECT_EQ(footprintOverlap(footprint, Pose2(0.0, 0.0, 0.0), Pose2(0.19, 0.0, 0.0)), 0.0);
+}

@@ -7,7 +7,6 @@
 #include <cstdio>
 #include <map>
 
-#include <opencv2/imgproc.hpp>
 
 namespace groundslam {
 namespace {
@@ -15,23 +14,70 @@ namespace {
 constexpr double kWrongTranslationM = 0.02;
 constexpr double kWrongRotationDeg = 2.0;
 
-std::vector<cv::Point2f> inWorld(const std::vector<Eigen::Vector2d>& footprint, const Pose2& T_world_robot) {
-  std::vector<cv::Point2f> points, hull;
-  for (const auto& p : footprint) {
-    const Eigen::Vector2d w = T_world_robot * p;
-    points.emplace_back(static_cast<float>(w.x()), static_cast<float>(w.y()));
+using Polygon = std::vector<Eigen::Vector2d>;
+
+double signedArea(const Polygon& polygon) {
+  double twice = 0.0;
+  for (size_t i = 0; i < polygon.size(); ++i) {
+    const Eigen::Vector2d& p = polygon[i];
+    const Eigen::Vector2d& q = polygon[(i + 1) % polygon.size()];
+    twice += p.x() * q.y() - q.x() * p.y();
   }
-  // intersectConvexConvex needs strictly convex polygons: the hull drops the border's collinear points.
-  cv::convexHull(points, hull);
+  return 0.5 * twice;
+}
+
+double cross(const Eigen::Vector2d& a, const Eigen::Vector2d& b) { return a.x() * b.y() - a.y() * b.x(); }
+
+/// Counter-clockwise convex hull (Andrew's monotone chain); a distorted border may bulge inwards a little.
+Polygon convexHull(Polygon points) {
+  std::sort(points.begin(), points.end(), [](const Eigen::Vector2d& p, const Eigen::Vector2d& q) {
+    return p.x() < q.x() || (p.x() == q.x() && p.y() < q.y());
+  });
+  if (points.size() < 3) return points;
+  Polygon hull(2 * points.size());
+  size_t k = 0;
+  for (size_t i = 0; i < points.size(); ++i) {  // lower chain
+    while (k >= 2 && cross(hull[k - 1] - hull[k - 2], points[i] - hull[k - 2]) <= 0.0) --k;
+    hull[k++] = points[i];
+  }
+  for (size_t i = points.size() - 1, lower = k + 1; i-- > 0;) {  // upper chain
+    while (k >= lower && cross(hull[k - 1] - hull[k - 2], points[i] - hull[k - 2]) <= 0.0) --k;
+    hull[k++] = points[i];
+  }
+  hull.resize(k - 1);
   return hull;
+}
+
+/// The part of `subject` on the left of the directed line a -> b (Sutherland-Hodgman, one edge).
+Polygon clipLeftOf(const Polygon& subject, const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+  Polygon kept;
+  const Eigen::Vector2d edge = b - a;
+  for (size_t i = 0; i < subject.size(); ++i) {
+    const Eigen::Vector2d& p = subject[i];
+    const Eigen::Vector2d& q = subject[(i + 1) % subject.size()];
+    const double side_p = cross(edge, p - a), side_q = cross(edge, q - a);
+    if (side_p >= 0.0) kept.push_back(p);
+    if ((side_p >= 0.0) != (side_q >= 0.0)) kept.push_back(p + (q - p) * (side_p / (side_p - side_q)));
+  }
+  return kept;
 }
 
 }  // namespace
 
 double footprintOverlap(const std::vector<Eigen::Vector2d>& footprint, const Pose2& T_world_a, const Pose2& T_world_b) {
+  // Exact clipping in double precision: OpenCV's intersectConvexConvex (float points) returned 0 for footprints
+  // half overlapping along a lawnmower lane, whose long edges lie on nearly the same lines.
   if (footprint.size() < 3) return 0.0;
-  std::vector<cv::Point2f> a = inWorld(footprint, T_world_a), b = inWorld(footprint, T_world_b), intersection;
-  return static_cast<double>(cv::intersectConvexConvex(a, b, intersection, true));
+  Polygon a, b;
+  for (const Eigen::Vector2d& p : footprint) a.push_back(T_world_a * p), b.push_back(T_world_b * p);
+  b = convexHull(b);
+  Polygon overlap = convexHull(a);
+  for (size_t i = 0; i < b.size() && !overlap.empty(); ++i) {
+    const Eigen::Vector2d& from = b[i];
+    const Eigen::Vector2d& to = b[(i + 1) % b.size()];
+    if ((to - from).squaredNorm() > 0.0) overlap = clipLeftOf(overlap, from, to);
+  }
+  return overlap.size() < 3 ? 0.0 : std::abs(signedArea(overlap));
 }
 
 CandidateTruth candidateTruth(const LoopCandidate& candidate, const Pose2& true_T_world_a, const Pose2& true_T_world_b,
