@@ -148,9 +148,9 @@ struct OdometryChecks {
   /// and the failing frames right after it: a floor that keeps losing the robot makes no map by starting again.
   /// 0: a lost segment is always relocalized.
   int restart_map_below_frames = 10;
-  /// right after tracking is lost for too little evidence on a floor that does not repeat, each frame up to this many
-  /// after the last tracked one is measured against it (its features, else the images aligned); one that is
-  /// joins the lost segment to the map (0: off)
+  /// Right after tracking is lost for too little evidence on a floor that does not repeat, each frame up to this many
+  /// after the last tracked one is measured against it (its features, else the images aligned); the first that is
+  /// joins the lost segment to the map. 0: off.
   int bridge_max_frames = 3;
 };
 

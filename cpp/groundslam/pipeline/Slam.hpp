@@ -126,15 +126,18 @@ class Slam {
   bool believable(const ImageAlignment& aligned) const;
   /// Aligns from the usual steps, or failing that from the one turn on the spot that makes the images most alike.
   std::optional<ImageAlignment> alignFromSteps(const AlignmentImage& before, const AlignmentImage& now, int steps) const;
-  /// Right after tracking was lost (within odometry.bridge_max_frames frames): the current frame measured against the last tracked
-  /// one joins the segment to the map, as a relocalization would (the map may not reach where the robot goes, and
-  /// weak floors give global localization too little). By its features first, else by aligning the images.
+  /// Right after tracking was lost (within odometry.bridge_max_frames frames): the current frame measured against
+  /// the last tracked one joins the segment to the map, as a relocalization would (the map may not reach where the
+  /// robot goes, and weak floors give global localization too little). By its features first, else by its image.
   void bridgeLoss(const Keyframe& current, const AlignmentImage& alignment, FrameResult& result);
+  /// A motion from the last tracked frame to the current one, and its covariance.
   struct Bridge {
     Pose2 T_tracked_current;
     Eigen::Matrix3d covariance;
   };
+  /// The current frame's features fitted to the last tracked frame's, believed as a loop closure would be.
   std::optional<Bridge> bridgeByFeatures(const Keyframe& current) const;
+  /// The current image aligned with the last tracked frame's (started from as many usual steps as frames passed).
   std::optional<Bridge> bridgeByAlignment(const Keyframe& current, const AlignmentImage& alignment) const;
   /// The current segment joins the map (a relocalization): its frames count as measured, the graph is optimised.
   void joinMap(FrameResult& result);
@@ -262,7 +265,7 @@ class Slam {
   std::optional<Keyframe> previous_;
   AlignmentImage previous_alignment_;  ///< the previous image as the alignment uses it (odometry.align_images)
   AlignmentImage tracked_alignment_;   ///< the last tracked frame's image, keyframe, graph index and time (bridgeLoss)
-  std::optional<Keyframe> tracked_keyframe_;
+  std::optional<Keyframe> tracked_keyframe_;  ///< its features as projected with its mount (bridgeByFeatures)
   int tracked_frame_ = -1;
   double tracked_time_ = 0.0;
   ImageAlignmentSettings alignment_settings_;
