@@ -7,7 +7,6 @@
 #include <cstdio>
 #include <map>
 
-
 namespace groundslam {
 namespace {
 

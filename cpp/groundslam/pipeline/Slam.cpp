@@ -497,17 +497,21 @@ OdometryEdge Slam::estimateOdometry(const Keyframe& previous, const Keyframe& cu
   return fit.ok() ? edge : fallbackOdometry(edge);
 }
 
+std::vector<Match> Slam::withoutRobotArtifacts(std::vector<Match> matches, const Keyframe& previous, const Keyframe& current) const {
+  if (config_.outdoor.reject_still) {
+    matches = splitStillMatches(matches, current.features, previous.features, config_.outdoor.still_radius_px / config_.camera.fx).moving;
+  }
+  return artifact_mask_.withoutArtifacts(matches, current.features);
+}
+
 std::optional<std::pair<RigidEstimate, std::vector<Match>>> Slam::fitLowOverlap(const Keyframe& previous, const Keyframe& current) const {
   // Not in the paper: at low overlap most of an image's features have no partner, and the ratio test also
   // throws away true matches whose second-best rival is close. A looser test keeps more of them; the fit is
   // believed only without a rival transform, which a repeated floor always has.
   const OdometryChecks& checks = config_.odometry_checks;
   if (!(checks.low_overlap_ratio > config_.matching.ratio)) return std::nullopt;
-  std::vector<Match> matches = bruteForceMatch(current.features.descriptors, previous.features.descriptors, checks.low_overlap_ratio);
-  if (config_.outdoor.reject_still) {
-    matches = splitStillMatches(matches, current.features, previous.features, config_.outdoor.still_radius_px / config_.camera.fx).moving;
-  }
-  matches = artifact_mask_.withoutArtifacts(matches, current.features);
+  std::vector<Match> matches = withoutRobotArtifacts(
+      bruteForceMatch(current.features.descriptors, previous.features.descriptors, checks.low_overlap_ratio), previous, current);
   const RigidEstimate fit = fitMatches(matches, previous, current, odometry_fitting_);
   if (!fit.ok() || fit.ambiguity() > checks.low_overlap_max_ambiguity) return std::nullopt;
   return std::make_pair(fit, std::move(matches));

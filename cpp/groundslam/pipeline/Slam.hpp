@@ -166,6 +166,9 @@ class Slam {
   /// Where the robot can have gone between the two frames, from its usual steps (odometry.repetition_*).
   MotionPrior motionPrior(const Keyframe& previous, const Keyframe& current) const;
   /// The second look at a pair whose fit failed: the fit and the matches it used, or nothing.
+  /// Matches without the still ones (outdoor.reject_still) and those in the artifact mask's cells: the robot's own
+  /// shadow, dirt, bumper and glare.
+  std::vector<Match> withoutRobotArtifacts(std::vector<Match> matches, const Keyframe& previous, const Keyframe& current) const;
   std::optional<std::pair<RigidEstimate, std::vector<Match>>> fitLowOverlap(const Keyframe& previous, const Keyframe& current) const;
   /// The current frame's roll, pitch and height from the odometry's inliers; its points re-projected and the
   /// odometry fitted again with them. Leaves everything as it was when the estimate fails.

@@ -30,11 +30,8 @@ std::optional<Slam::Bridge> Slam::bridgeByFeatures(const Keyframe& current) cons
   // no rival transform, and the robot's speed over the time between the two frames (unless nearly every match
   // agrees: frames dropped without a trace in the timestamps).
   const Keyframe& tracked = *tracked_keyframe_;
-  std::vector<Match> matches = matcher_.match(current.features.descriptors, tracked.features.descriptors);
-  if (config_.outdoor.reject_still) {
-    matches = splitStillMatches(matches, current.features, tracked.features, config_.outdoor.still_radius_px / config_.camera.fx).moving;
-  }
-  matches = artifact_mask_.withoutArtifacts(matches, current.features);
+  const std::vector<Match> matches =
+      withoutRobotArtifacts(matcher_.match(current.features.descriptors, tracked.features.descriptors), tracked, current);
   const RigidEstimate fit = fitMatches(matches, tracked, current, odometry_fitting_);
   const LoopClosureSettings& gates = config_.loop_closure;
   const OdometryChecks& checks = config_.odometry_checks;
