@@ -98,6 +98,7 @@ RunProgress runInto(const std::string& folder, const RunOptions& o, const Datase
             << countStatus(results, FrameStatus::low_overlap) << " measured at low overlap (less certain), "
             << countStatus(results, FrameStatus::aligned) << " measured by aligning the images (too few features; less certain), "
             << countStatus(results, FrameStatus::unconfirmed) << " measured from few keypoints the images did not confirm (less certain), "
+            << countStatus(results, FrameStatus::uncertain) << " measured with a covariance too wide for ok (less certain), "
             << countStatus(results, FrameStatus::sharp_turn) << " measured across a sharp turn (translation less certain), "
             << countStatus(results, FrameStatus::gap) << " measured across dropped frames (less certain), "
             << countStatus(results, FrameStatus::fallback) << " with fallback odometry (pose assumed from earlier motion), "

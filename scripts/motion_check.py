@@ -4,7 +4,7 @@
 Usage: scripts/motion_check.py RUN_DIR SEQUENCE_DIR [--json]
 Prints: frames whose status is ok but whose odometry motion is off by more than 5 mm or 0.5 degrees
 (silent wrong motions), the same count among the frames flagged as less certain (low_overlap, sharp_turn,
-gap, aligned, unconfirmed), and the RMS error of the estimated roll, pitch and height (mount.csv).
+gap, aligned, unconfirmed, uncertain), and the RMS error of the estimated roll, pitch and height (mount.csv).
 """
 import csv
 import json
@@ -44,7 +44,7 @@ def main():
     frames = list(csv.DictReader(open(run + '/frames.csv')))
     wrong, ok, worst_m, worst_deg = 0, 0, 0.0, 0.0
     low, low_wrong = 0, 0
-    flagged = {'sharp_turn': [0, 0], 'gap': [0, 0], 'aligned': [0, 0], 'unconfirmed': [0, 0]}  # frames, off
+    flagged = {'sharp_turn': [0, 0], 'gap': [0, 0], 'aligned': [0, 0], 'unconfirmed': [0, 0], 'uncertain': [0, 0]}  # frames, off
     tilt_err, height_err, tilt_level = [], [], []
     for prev, row in zip(frames, frames[1:]):
         i, j = int(prev['index']), int(row['index'])
@@ -74,6 +74,7 @@ def main():
               'gap_frames': flagged['gap'][0], 'gap_off': flagged['gap'][1],
               'aligned_frames': flagged['aligned'][0], 'aligned_off': flagged['aligned'][1],
               'unconfirmed_frames': flagged['unconfirmed'][0], 'unconfirmed_off': flagged['unconfirmed'][1],
+              'uncertain_frames': flagged['uncertain'][0], 'uncertain_off': flagged['uncertain'][1],
               'mount_estimated_frames': len(height_err),
               'tilt_rms_error_deg': rms(tilt_err), 'tilt_rms_true_deg': rms(tilt_level),
               'height_rms_error_mm': 1000 * rms(height_err)}

@@ -251,13 +251,14 @@ SmoothFloorRun runSmoothFloor(bool align_images, bool loop_closure = false, int 
 }  // namespace
 
 struct WeakFitRun {
-  int ok = 0, ok_off = 0, aligned = 0, aligned_off = 0, unconfirmed = 0, unconfirmed_off = 0;
+  int ok = 0, ok_off = 0, aligned = 0, aligned_off = 0, unconfirmed = 0, unconfirmed_off = 0, uncertain = 0, uncertain_off = 0;
   double ok_heading_error_rad = 0.0;        ///< summed over ok frames
   double measured_heading_error_rad = 0.0;  ///< summed over ok and aligned frames
 };
 
-/// Odometry alone on a floor of bricks, 1 cm per frame; a fit with fewer than `check_below` inliers is checked.
-WeakFitRun runBrickFloor(int check_below, sim::PathKind path, std::uint64_t seed, bool outdoors = false) {
+/// Odometry alone on a floor of bricks, 1 cm per frame; a fit with fewer than `check_below` inliers is checked;
+/// `ok_sigmas` > 0: a frame is `ok` only if its fit's covariance vouches for it (OdometryChecks::ok_sigmas).
+WeakFitRun runBrickFloor(int check_below, sim::PathKind path, std::uint64_t seed, bool outdoors = false, double ok_sigmas = 0.0) {
   sim::SimulationSettings s;
   s.path.kind = path;
   s.path.frames = 120;
@@ -271,6 +272,7 @@ WeakFitRun runBrickFloor(int check_below, sim::PathKind path, std::uint64_t seed
   config.camera = cameraConfigOf(s.camera, s.mounting_height_m);
   config.loop_closure.enabled = false;
   config.odometry_checks.align_check_below_inliers = check_below;
+  config.odometry_checks.ok_sigmas = ok_sigmas;
   Slam slam(config, nullptr);
   WeakFitRun run;
   for (int i = 0; i < simulator.frameCount(); ++i) {
@@ -288,8 +290,13 @@ WeakFitRun runBrickFloor(int check_below, sim::PathKind path, std::uint64_t seed
     } else if (r.status == FrameStatus::unconfirmed) {
       ++run.unconfirmed;
       run.unconfirmed_off += off ? 1 : 0;
+    } else if (r.status == FrameStatus::uncertain) {
+      ++run.uncertain;
+      run.uncertain_off += off ? 1 : 0;
     }
-    if (r.status == FrameStatus::ok || r.status == FrameStatus::aligned) run.measured_heading_error_rad += off_rad;
+    if (r.status == FrameStatus::ok || r.status == FrameStatus::aligned || r.status == FrameStatus::uncertain) {
+      run.measured_heading_error_rad += off_rad;
+    }
   }
   return run;
 }
@@ -340,6 +347,31 @@ TEST(ImageAlignment, OutdoorsOnABrickFloorAFitOfFewInliersTheImagesDoNotConfirmI
   EXPECT_GE(unconfirmed, unconfirmed_off);
 }
 
+TEST(ImageAlignment, OutdoorsOnABrickFloorAFitWhoseCovarianceAllowsMoreThanTheToleranceSaysUncertain) {
+  // The same outdoor brick floors: of the fits the images confirm, a few are still over half a degree off, and
+  // their covariance says they may be. With ok_sigmas 3 (the default) such frames say `uncertain`; the label
+  // changes, not the motion. Measured, ok_sigmas 0 / 3 (seeds 8 and 13): ok frames 37 / 7, of them off 3 / 0;
+  // uncertain frames 30, of them off 3.
+  int ok_off_without = 0, ok_off_with = 0, uncertain = 0, uncertain_off = 0, ok_with = 0;
+  for (const std::uint64_t seed : {8u, 13u}) {
+    const WeakFitRun without = runBrickFloor(60, sim::PathKind::loop, seed, true, 0.0);
+    const WeakFitRun with = runBrickFloor(60, sim::PathKind::loop, seed, true, 3.0);
+    EXPECT_EQ(without.uncertain, 0);
+    EXPECT_DOUBLE_EQ(with.measured_heading_error_rad, without.measured_heading_error_rad);  // the same motions
+    EXPECT_EQ(with.ok + with.uncertain, without.ok);
+    ok_off_without += without.ok_off;
+    ok_off_with += with.ok_off;
+    ok_with += with.ok;
+    uncertain += with.uncertain;
+    uncertain_off += with.uncertain_off;
+  }
+  EXPECT_GE(ok_off_without, 2);
+  EXPECT_EQ(ok_off_with, 0);
+  EXPECT_EQ(uncertain_off, ok_off_without);  // every one of them, and
+  EXPECT_GE(ok_with, 4);                     // not every frame
+  EXPECT_LE(uncertain, 35);
+}
+
 TEST(ImageAlignment, OnASmoothFloorTheImagesAreAlignedWhereTheFeaturesFail) {
   const SmoothFloorRun without = runSmoothFloor(false);
   const SmoothFloorRun with = runSmoothFloor(true);
@@ -370,4 +402,41 @@ TEST(ImageAlignment, OnASmoothFloorTrackingLostAtABlankFrameIsBridgedToTheLastTr
   const SmoothFloorRun unbroken = runSmoothFloor(true, true);
   EXPECT_LT(with.ate_m, unbroken.ate_m + 0.001);
   EXPECT_LT(unbroken.ate_m, 0.012);
+}
+
+TEST(ImageAlignment, AFitAtRestOnAFloorTheRobotsArtifactsOutnumberIsNotConfirmedByTheImages) {
+  // A faint smooth floor (blobs 1.2 and 1.4 cm wide at a tenth of the contrast) under the outdoor look, the robot
+  // driving 1 cm per frame: the shadow edge, lens dirt and bumper outnumber the ground's keypoints, fits say the
+  // robot stood still, and aligning the images from rest ends at rest too. The images cannot confirm such a fit
+  // (their check leaves out what stays still where the fit moves the ground, and at rest nothing): under 30
+  // inliers it says `unconfirmed`. Measured without this rule: of 23 + 26 such fits, 20 + 21 said `ok`; with it
+  // 25 + 27, none `ok`. (Fits at rest on 30 or more inliers stay `ok`: docs/accuracy.md, Session 17.)
+  int weak_rest = 0, weak_rest_ok = 0, weak_rest_unconfirmed = 0;
+  for (const double blur : {10.0, 12.0}) {
+    sim::SimulationSettings s;
+    s.path.kind = sim::PathKind::lawnmower;
+    s.path.frames = 40;
+    s.path.laps = 1;
+    s.photometry.noise_sigma = 2.0;
+    s.user_texture_width_m = 0.6;
+    s.seed = 5;
+    s.artifacts = {0.6, 6, 0.8, 0.15};
+    cv::Mat floor;
+    smoothTexture(512, blur, 5).convertTo(floor, CV_8U, 0.1, 128.0 * 0.9);
+    const sim::SequenceSimulator simulator(s, floor);
+    Config config;
+    config.camera = cameraConfigOf(s.camera, s.mounting_height_m);
+    config.loop_closure.enabled = false;
+    Slam slam(config, nullptr);
+    for (int i = 0; i < simulator.frameCount(); ++i) {
+      const FrameResult r = slam.process(simulator.renderFrame(i), i);
+      if (i == 0 || r.odometry.translation().norm() > 0.001 || r.inliers >= 30 || !measuredByOdometry(r.status)) continue;
+      ++weak_rest;  // the robot drove 1 cm
+      weak_rest_ok += r.status == FrameStatus::ok ? 1 : 0;
+      weak_rest_unconfirmed += r.status == FrameStatus::unconfirmed ? 1 : 0;
+    }
+  }
+  EXPECT_GE(weak_rest, 40);
+  EXPECT_EQ(weak_rest_ok, 0);
+  EXPECT_EQ(weak_rest_unconfirmed, weak_rest);
 }

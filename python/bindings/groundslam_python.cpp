@@ -161,7 +161,7 @@ PYBIND11_MODULE(groundslam, m) {
   py::class_<FrameResult>(m, "FrameResult", "What the pipeline reports for one frame")
       .def_readonly("index", &FrameResult::index)
       .def_readonly("timestamp", &FrameResult::timestamp)
-      .def_property_readonly("status", &FrameResult::statusName, "first | ok | low_overlap | aligned | unconfirmed | sharp_turn | gap (measured, less certain) | fallback_<reason> | lost_<reason> (the frame that lost tracking) | lost | relocalized")
+      .def_property_readonly("status", &FrameResult::statusName, "first | ok | low_overlap | aligned | unconfirmed | uncertain | sharp_turn | gap (measured, less certain) | fallback_<reason> | lost_<reason> (the frame that lost tracking) | lost | relocalized")
       .def_readonly("pose", &FrameResult::T_world_robot, "the estimate when the frame was processed")
       .def_readonly("keypoints", &FrameResult::keypoints)
       .def_readonly("matches", &FrameResult::matches)

@@ -324,4 +324,11 @@ Pose2 leastSquaresRigid(const std::vector<Eigen::Vector2d>& target, const std::v
   return leastSquaresFit(target, source, all);
 }
 
+bool withinAtSigmas(const Eigen::Matrix3d& covariance, double sigmas, double within_m, double within_rad) {
+  const double sigma_rad = std::sqrt(std::max(0.0, covariance(2, 2)));
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> position(covariance.topLeftCorner<2, 2>());
+  const double sigma_m = std::sqrt(std::max(0.0, position.eigenvalues().maxCoeff()));
+  return sigmas * sigma_rad <= within_rad && sigmas * sigma_m <= within_m;
+}
+
 }  // namespace groundslam

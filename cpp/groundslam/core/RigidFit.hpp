@@ -83,4 +83,9 @@ RigidEstimate refineRigidTransform(const std::vector<Eigen::Vector2d>& target, c
 /// correspondences such as one image's points projected two ways. Identity when there are none.
 Pose2 leastSquaresRigid(const std::vector<Eigen::Vector2d>& target, const std::vector<Eigen::Vector2d>& source);
 
+/// Whether a motion with this (x, y, theta) covariance is within `within_m` and `within_rad` of the truth at
+/// `sigmas` standard deviations: its heading's, and its position's along the worst direction (x and y correlated
+/// make one direction worse than either axis).
+bool withinAtSigmas(const Eigen::Matrix3d& covariance, double sigmas, double within_m, double within_rad);
+
 }  // namespace groundslam

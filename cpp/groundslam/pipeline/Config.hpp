@@ -115,6 +115,13 @@ struct OdometryChecks {
   /// rocking bound), a frame whose turn makes this more than sharp_turn_lever_m says `sharp_turn`, not `ok`
   /// (at 25 cm, 1 degree and 5 mm: turns of more than 70 degrees between frames). 0: off.
   double sharp_turn_lever_m = 0.005;
+  /// A frame is `ok` only when its motion is right within ok_within_m and ok_within_deg. A fit whose own
+  /// covariance allows more, ok_sigmas standard deviations of its heading or of its position along the worst
+  /// direction, says `uncertain` instead (a fit of a few dozen keypoints on a weak floor, a turn measured from
+  /// matches bunched in one corner). Only the label: the edge keeps its covariance. ok_sigmas 0: off.
+  double ok_within_m = 0.005;
+  double ok_within_deg = 0.5;
+  double ok_sigmas = 3.0;
   /// A motion spanning at least this many frames' travel (its length over the last good motions' median length,
   /// or its time over the last good motion's) crossed frames that were dropped, with or without a trace in the
   /// timestamps: the frame says `gap`, not `ok` (the mount rocked over the gap, and one pair of views does not
@@ -300,6 +307,9 @@ void visitConfigFields(Config_& c, Visitor&& v) {
   v("odometry", "align_check_support", c.odometry_checks.align_check_support, kNonNegative);
   v("odometry", "align_confirm_below_inliers", c.odometry_checks.align_confirm_below_inliers, Range{0, 1000000});
   v("odometry", "sharp_turn_lever_m", c.odometry_checks.sharp_turn_lever_m, kNonNegative);
+  v("odometry", "ok_within_m", c.odometry_checks.ok_within_m, kPositive);
+  v("odometry", "ok_within_deg", c.odometry_checks.ok_within_deg, kPositive);
+  v("odometry", "ok_sigmas", c.odometry_checks.ok_sigmas, kNonNegative);
   v("odometry", "gap_min_steps", c.odometry_checks.gap_min_steps, kNonNegative);
   v("odometry", "repetition_max_steps", c.odometry_checks.repetition_max_steps, Range{0, 1000});
   v("odometry", "repetition_turn_deg", c.odometry_checks.repetition_turn_deg, kNonNegative);

@@ -27,6 +27,7 @@ enum class FrameStatus {
   low_overlap,  ///< odometry measured it from a second, looser matching of a low-overlap pair: less certain
   aligned,      ///< too few features: the motion was measured by aligning the two images themselves: less certain
   unconfirmed,  ///< odometry measured it from a few dozen keypoints that aligning the images did not confirm: less certain
+  uncertain,    ///< odometry measured it, but the fit's own covariance does not vouch for the `ok` tolerance
   sharp_turn,   ///< odometry measured it, but the turn is so sharp that the unknown tilt may move it by millimetres
   gap,          ///< odometry measured it across dropped frames (several frames' travel): the mount rocked meanwhile
   fallback,     ///< odometry failed (FrameResult::fallback_reason); the previous motion was assumed
@@ -34,10 +35,11 @@ enum class FrameStatus {
   relocalized,  ///< global localization found the pose again (tracking resumes)
 };
 
-/// Odometry measured the frame's motion with its first matching (`sharp_turn`, `gap` and `unconfirmed` only say it
-/// is less certain).
+/// Odometry measured the frame's motion with its first matching (`sharp_turn`, `gap`, `unconfirmed` and `uncertain`
+/// only say it is less certain).
 inline bool measuredByOdometry(FrameStatus status) {
-  return status == FrameStatus::ok || status == FrameStatus::sharp_turn || status == FrameStatus::gap || status == FrameStatus::unconfirmed;
+  return status == FrameStatus::ok || status == FrameStatus::sharp_turn || status == FrameStatus::gap ||
+         status == FrameStatus::unconfirmed || status == FrameStatus::uncertain;
 }
 
 struct FrameResult {
@@ -56,7 +58,7 @@ struct FrameResult {
   MountState mount;           ///< the camera's roll, pitch and height used for this frame's ground points
   bool mount_estimated = false;  ///< mount was estimated from the images (else the calibrated mount)
   StageTimes times;
-  /// frames.csv's `status`: first | ok | low_overlap | aligned | unconfirmed | sharp_turn | gap | fallback_<reason> (e.g. fallback_too_few_matches) | lost_<reason> (the
+  /// frames.csv's `status`: first | ok | low_overlap | aligned | unconfirmed | uncertain | sharp_turn | gap | fallback_<reason> (e.g. fallback_too_few_matches) | lost_<reason> (the
   /// frame whose failed odometry lost tracking, e.g. lost_degenerate) | lost (a later frame of a lost segment) | relocalized.
   std::string statusName() const {
     switch (status) {
@@ -65,6 +67,7 @@ struct FrameResult {
       case FrameStatus::low_overlap: return "low_overlap";
       case FrameStatus::aligned: return "aligned";
       case FrameStatus::unconfirmed: return "unconfirmed";
+      case FrameStatus::uncertain: return "uncertain";
       case FrameStatus::sharp_turn: return "sharp_turn";
       case FrameStatus::gap: return "gap";
       case FrameStatus::fallback: return std::string("fallback_") + fitStatusName(fallback_reason);

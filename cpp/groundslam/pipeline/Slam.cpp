@@ -126,6 +126,7 @@ FrameResult Slam::process(PreparedFrame prepared) {
                     : odometry.unconfirmed ? FrameStatus::unconfirmed
                     : sharpTurn(odometry.T_prev_curr) ? FrameStatus::sharp_turn
                     : spansGap(steps) ? FrameStatus::gap
+                    : !vouchedFor(odometry) ? FrameStatus::uncertain
                                           : FrameStatus::ok;
     if (odometry.fallback) result.fallback_reason = odometry.fit_status;
     measured_.push_back((!odometry.fallback && !lost_) || map_start_ == frame);
@@ -633,6 +634,12 @@ bool Slam::plausibleMotion(const Pose2& T_prev_curr, double previous_time, doubl
 bool Slam::spansGap(double steps) const {
   const double min_steps = config_.odometry_checks.gap_min_steps;
   return min_steps > 0.0 && steps >= min_steps;  // a lost frame's infinite steps too
+}
+
+bool Slam::vouchedFor(const OdometryEdge& odometry) const {
+  const OdometryChecks& checks = config_.odometry_checks;
+  return checks.ok_sigmas <= 0.0 ||
+         withinAtSigmas(odometry.covariance, checks.ok_sigmas, checks.ok_within_m, checks.ok_within_deg * M_PI / 180.0);
 }
 
 bool Slam::sharpTurn(const Pose2& T_prev_curr) const {
