@@ -124,15 +124,6 @@ cv::Mat movingPixels(const cv::Mat& previous, const cv::Mat& current, const cv::
   return moving;
 }
 
-double stillShare(const cv::Mat& previous, const cv::Mat& current, double still_correlation) {
-  if (previous.empty() || previous.size() != current.size()) return 1.0;
-  const auto [in_place, textured] = localCorrelation(previous, current);
-  const int texture = cv::countNonZero(textured);
-  if (texture == 0) return 1.0;
-  const cv::Mat still = (in_place > still_correlation) & textured;
-  return static_cast<double>(cv::countNonZero(still)) / texture;
-}
-
 ImageAlignment alignImages(const AlignmentImage& previous, const AlignmentImage& current, const std::vector<cv::Matx23d>& starts,
                            const ImageAlignmentSettings& settings) {
   ImageAlignment best;

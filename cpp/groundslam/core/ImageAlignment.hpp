@@ -48,11 +48,6 @@ struct ImageAlignment {
 /// previous, pixels of these images) puts it: it moved with the camera.
 cv::Mat movingPixels(const cv::Mat& previous, const cv::Mat& current, const cv::Matx23d& W_expected, double still_correlation);
 
-/// The share of the textured neighbourhoods (of both images) that look the same at the same place in both
-/// (settings.still_correlation): about 1 when the robot stood still, the share of the image its own shadow edge,
-/// lens dirt and bumper take when it moved. 1 when nothing is textured (nothing shows a motion).
-double stillShare(const cv::Mat& previous, const cv::Mat& current, double still_correlation);
-
 /// The rigid warp of `current` onto `previous` (both alignmentImage()s of one size) from each start (original
 /// pixels, current to previous); the one of highest correlation, probed from settings.probe_px around it. The
 /// first start is the expected motion that still parts are told by (movingPixels).
