@@ -228,7 +228,9 @@ int Slam::addUnmeasuredMotion(const OdometryEdge& failed) {
 void Slam::startSegment(const OdometryEdge& failed) {
   // The relocalization edge, not this one, will decide where the new segment lies.
   const int to = addUnmeasuredMotion(failed);
-  bridgeable_loss_ = tooLittleEvidence(failed.fit_status) && !repeatedFloor(to);
+  // A motion refused for its speed alone (frames dropped without a trace) is bridged too: the bridge believes only
+  // what a loop closure would, over the time between the two frames.
+  bridgeable_loss_ = (tooLittleEvidence(failed.fit_status) || failed.fit_status == FitStatus::implausible_motion) && !repeatedFloor(to);
   loop_closer_->trackingLost(graph_.poses());
   ever_lost_ = true;
   ++segment_;

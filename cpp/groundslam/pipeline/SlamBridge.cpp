@@ -1,4 +1,5 @@
-// Right after tracking is lost for too little evidence, the next frames are measured against the last tracked one.
+// Right after tracking is lost for too little evidence or for the robot's speed, the next frames are measured against
+// the last tracked one.
 #include <optional>
 #include <vector>
 
@@ -9,8 +10,9 @@ namespace groundslam {
 
 void Slam::bridgeLoss(const Keyframe& current, const AlignmentImage& alignment, FrameResult& result) {
   const int frames_since = current.index - tracked_frame_;
-  // Only a loss for too little evidence (one blurred or covered image, a patch of smooth floor), on a floor that
-  // does not repeat: there a motion spanning the lost frames matches one repetition over as readily as the right one.
+  // Only a loss for too little evidence (one blurred or covered image, a patch of smooth floor) or for the robot's
+  // speed (frames dropped without a trace), on a floor that does not repeat: there a motion spanning the lost frames
+  // matches one repetition over as readily as the right one.
   if (!bridgeable_loss_ || repeatedFloor(current.index) || !tracked_keyframe_ || frames_since < 2 ||
       frames_since > config_.odometry_checks.bridge_max_frames) {
     return;
