@@ -283,7 +283,8 @@ class Slam {
   int last_rival_frame_ = -1;  ///< the last frame whose odometry fit had a rival
   /// The floor repeats: one of the last kRepeatedFloorFrames odometry fits up to `frame` had a rival repetition.
   bool repeatedFloor(int frame) const { return last_rival_frame_ >= 0 && frame - last_rival_frame_ <= kRepeatedFloorFrames; }
-  /// Tracking was lost for too little evidence on a floor that does not repeat: bridgeLoss may join it.
+  /// Tracking was lost for too little evidence or for the robot's speed on a floor that does not repeat: bridgeLoss
+  /// may join it.
   bool bridgeable_loss_ = false;
   std::deque<Pose2> recent_steps_;  ///< the last kRecentSteps good motions, a gap's shared among its steps
   size_t steps_since_turn_ = 0;     ///< good motions since the last sharp turn (recent_steps_ before it point elsewhere)
