@@ -203,9 +203,9 @@ class Slam {
   /// the median of the last good ones', whichever is more (at least 1; a failed motion: infinite). Frames dropped
   /// without a trace in the timestamps still show in the length; the mount rocked over all of them.
   double rockingSteps(const OdometryEdge& odometry, double previous_time, double current_time) const;
-  /// True when the turn makes the tilt's lever arm longer than odometry.sharp_turn_lever_m (OdometryChecks).
   /// The fit's own covariance keeps its motion within the `ok` tolerance (OdometryChecks::ok_sigmas).
   bool vouchedFor(const OdometryEdge& odometry) const;
+  /// True when the turn makes the tilt's lever arm longer than odometry.sharp_turn_lever_m (OdometryChecks).
   bool sharpTurn(const Pose2& T_prev_curr) const;
   /// True when a motion spans at least odometry.gap_min_steps frames' travel (rockingSteps).
   bool spansGap(double steps) const;
