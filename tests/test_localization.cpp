@@ -258,9 +258,8 @@ TEST(Relocalization, AMotionRefusedForItsSpeedIsBridgedToTheLastTrackedFrame) {
   // frame's time, is 2.7 cm off the robot's speed (allowed: 2 cm + 50% of a step) and is refused, not every match
   // agreeing with it (decisive_inlier_share set out of reach) and the robot's steps not asked (repetition_max_steps
   // 0; on carpet under the outdoor look such a fit was 5 mm off four steps). The next frame is bridged to the last
-  // tracked one:
-  // 4.5 cm in two frames' time is within 2 cm + 50% of two steps, and its fit has what a loop closure needs. Global
-  // localization is kept out (localization.min_votes out of reach: a weak floor where it finds nothing, as carpet
+  // tracked one: 4.5 cm in two frames' time is within 2 cm + 50% of two steps, and its fit has what a loop closure
+  // needs. Global localization is kept out (localization.min_votes out of reach: a weak floor where it finds nothing, as carpet
   // under the outdoor look): with the bridge off the robot stays lost.
   auto settings = session("asphalt", sim::PathKind::loop, 400, 5);
   settings.ground_seed.reset();

@@ -178,7 +178,7 @@ FrameResult Slam::process(PreparedFrame prepared) {
 std::vector<Match> Slam::stillFeatures(const Keyframe& previous, const Keyframe& current, const Pose2& T_prev_curr) const {
   const OutdoorConfig& o = config_.outdoor;
   if (o.still_max_hamming <= 0) return {};
-  const double moved_m = o.moved_factor * o.still_radius_px * ground_sample_m_;
+  const double moved_m = movedDistanceM();
   std::vector<Match> still;
   for (const Match& m : findStillFeatures(current.features, previous.features, o.still_radius_px / config_.camera.fx, o.still_max_hamming)) {
     // Only where the motion should have moved the feature: near a turn's centre the ground itself stays put.
@@ -382,7 +382,7 @@ std::optional<RigidEstimate> Slam::fitWithoutStill(const StillSplit& split, cons
     moved += (fit.T_target_source * p - p).norm();
   }
   moved /= static_cast<double>(split.still.size());
-  if (moved < config_.outdoor.moved_factor * config_.outdoor.still_radius_px * ground_sample_m_) return std::nullopt;
+  if (moved < movedDistanceM()) return std::nullopt;
   return fit;
 }
 

@@ -205,6 +205,9 @@ class Slam {
   double rockingSteps(const OdometryEdge& odometry, double previous_time, double current_time) const;
   /// The fit's own covariance keeps its motion within the `ok` tolerance (OdometryChecks::ok_sigmas).
   bool vouchedFor(const OdometryEdge& odometry) const;
+  /// How far a fit must move a still match on the ground for the robot to have moved (outdoor.moved_factor still
+  /// radii): less, and the match may be ground at rest as well as the robot's own artifact.
+  double movedDistanceM() const { return config_.outdoor.moved_factor * config_.outdoor.still_radius_px * ground_sample_m_; }
   /// True when the turn makes the tilt's lever arm longer than odometry.sharp_turn_lever_m (OdometryChecks).
   bool sharpTurn(const Pose2& T_prev_curr) const;
   /// True when a motion spans at least odometry.gap_min_steps frames' travel (rockingSteps).

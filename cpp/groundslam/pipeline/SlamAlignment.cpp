@@ -116,10 +116,9 @@ Slam::FitCheck Slam::checkedByAlignment(const Pose2& fitted, int inliers, const 
   // A fit that leaves every match where it was cannot be confirmed by the images: the alignment's mask leaves out
   // what stays still where the fit moves the ground, and at rest nothing does, so the robot's own shadow edge,
   // lens dirt and bumper, which stay still whether or not it moved, pull the alignment to rest as well.
-  const double moved_m = config_.outdoor.moved_factor * config_.outdoor.still_radius_px * ground_sample_m_;
   const bool at_rest = std::all_of(used.begin(), used.end(), [&](const Match& m) {
     const Eigen::Vector2d& p = current.features.points[static_cast<size_t>(m.query)];
-    return (fitted * p - p).norm() < moved_m;
+    return (fitted * p - p).norm() < movedDistanceM();
   });
   if (at_rest) return check;
   const ImageAlignment aligned = alignImages(previous_alignment_, alignment, {imageWarpOf(fitted)}, alignment_settings_);
