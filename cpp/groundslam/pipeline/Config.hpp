@@ -159,6 +159,16 @@ struct OdometryChecks {
   /// after the last tracked one is measured against it (its features, else the images aligned); the first that is
   /// joins the lost segment to the map. 0: off.
   int bridge_max_frames = 3;
+  /// Where a bridging frame's features and image both fail (a quarter turn on the spot over a weak floor under a
+  /// shadow that turns with it, a few frames dropped without a trace), the motions the robot can have made since
+  /// the last tracked frame are searched (core/MotionSearch.hpp): one usual step and a turn on the spot, every
+  /// this many degrees, or 1 to repetition_max_steps usual steps. The loss frame is searched too; two frames'
+  /// results must agree through the lost segment's odometry. 0: off.
+  double bridge_search_turn_deg = 5.0;
+  double bridge_search_radius_m = 0.008;  ///< features compared within this of where a hypothesis puts them
+  int bridge_search_max_hamming = 80;     ///< a pair further apart is no match, bits
+  double bridge_search_agreement_m = 0.01;   ///< two frames' searched motions agree within this,
+  double bridge_search_agreement_deg = 2.0;  ///< and this
 };
 
 /// Outdoors and on real robots: features that stay still in the image, and the camera's tilt and height per
@@ -321,6 +331,11 @@ void visitConfigFields(Config_& c, Visitor&& v) {
   v("odometry", "repetition_support_ratio", c.odometry_checks.repetition_support_ratio, kNonNegative);
   v("odometry", "restart_map_below_frames", c.odometry_checks.restart_map_below_frames, Range{0, 1e9});
   v("odometry", "bridge_max_frames", c.odometry_checks.bridge_max_frames, Range{0, 1000});
+  v("odometry", "bridge_search_turn_deg", c.odometry_checks.bridge_search_turn_deg, Range{0.0, 180.0});
+  v("odometry", "bridge_search_radius_m", c.odometry_checks.bridge_search_radius_m, kPositive);
+  v("odometry", "bridge_search_max_hamming", c.odometry_checks.bridge_search_max_hamming, Range{0, 256});
+  v("odometry", "bridge_search_agreement_m", c.odometry_checks.bridge_search_agreement_m, kPositive);
+  v("odometry", "bridge_search_agreement_deg", c.odometry_checks.bridge_search_agreement_deg, kPositive);
   v("odometry", "fallback_sigma_m", c.fallback.sigma_m, kPositive);
   v("odometry", "fallback_sigma_rad", c.fallback.sigma_rad, kPositive);
   v("loop_closure", "enabled", c.loop_closure.enabled, Range{});

@@ -139,6 +139,17 @@ class Slam {
   std::optional<Bridge> bridgeByFeatures(const Keyframe& current) const;
   /// The current image aligned with the last tracked frame's (started from as many usual steps as frames passed).
   std::optional<Bridge> bridgeByAlignment(const Keyframe& current, const AlignmentImage& alignment) const;
+  /// The current frame's motion from the last tracked frame, searched among the motions the robot can have made
+  /// at the loss frame (core/MotionSearch.hpp, odometry.bridge_search_*) followed by the lost segment's odometry.
+  std::optional<Bridge> bridgeBySearch(const Keyframe& current) const;
+  /// A searched bridge once an earlier frame's, carried forward by the lost segment's odometry, agrees with it
+  /// (that one's edge is added then); until then the search waits in pending_search_.
+  std::optional<Bridge> confirmedSearch(const Keyframe& current);
+  struct PendingBridge {
+    int frame = -1;
+    Bridge bridge;
+  };
+  std::optional<PendingBridge> pending_search_;
   /// The current segment joins the map (a relocalization): its frames count as measured, the graph is optimised.
   void joinMap(FrameResult& result);
   /// The pixel warp (current image to previous) a ground motion T_prev_curr makes, and the ground motion of a warp;

@@ -1,8 +1,11 @@
 // Right after tracking is lost for too little evidence or for the robot's speed, the next frames are measured against
 // the last tracked one.
+#include <algorithm>
+#include <cmath>
 #include <optional>
 #include <vector>
 
+#include "groundslam/core/MotionSearch.hpp"
 #include "groundslam/pipeline/Slam.hpp"
 #include "groundslam/pipeline/StageTimer.hpp"
 
@@ -13,13 +16,16 @@ void Slam::bridgeLoss(const Keyframe& current, const AlignmentImage& alignment, 
   // Only a loss for too little evidence (one blurred or covered image, a patch of smooth floor) or for the robot's
   // speed (frames dropped without a trace), on a floor that does not repeat: there a motion spanning the lost frames
   // matches one repetition over as readily as the right one.
-  if (!bridgeable_loss_ || repeatedFloor(current.index) || !tracked_keyframe_ || frames_since < 2 ||
+  if (!bridgeable_loss_ || repeatedFloor(current.index) || !tracked_keyframe_ || frames_since < 1 ||
       frames_since > config_.odometry_checks.bridge_max_frames) {
     return;
   }
   StageTimer timer;
-  std::optional<Bridge> bridge = bridgeByFeatures(current);
-  if (!bridge) bridge = bridgeByAlignment(current, alignment);
+  std::optional<Bridge> bridge;
+  // The loss frame itself has just failed against the last tracked frame: only the search can say more of it.
+  if (frames_since >= 2) bridge = bridgeByFeatures(current);
+  if (!bridge && frames_since >= 2) bridge = bridgeByAlignment(current, alignment);
+  if (!bridge) bridge = confirmedSearch(current);
   result.times.loop_ms += timer.lap();
   if (!bridge) return;
   graph_.addEdge({tracked_frame_, current.index, bridge->T_tracked_current,
@@ -54,6 +60,57 @@ std::optional<Slam::Bridge> Slam::bridgeByAlignment(const Keyframe& current, con
   const Pose2 T_tracked_current = groundMotionOf(aligned->W_previous_current);
   if (!plausibleMotion(T_tracked_current, tracked_time_, current.timestamp)) return std::nullopt;
   return Bridge{T_tracked_current, sigmaCovariance(checks.align_sigma_m, checks.align_sigma_rad)};
+}
+
+std::optional<Slam::Bridge> Slam::bridgeBySearch(const Keyframe& current) const {
+  const OdometryChecks& checks = config_.odometry_checks;
+  if (!(checks.bridge_search_turn_deg > 0.0) || !last_good_odometry_) return std::nullopt;
+  // What the robot can have done at the loss frame: a turn on the spot after one usual step, or 1 to
+  // repetition_max_steps usual steps (frames dropped without a trace); then what the lost segment measured since.
+  const std::vector<Pose2>& poses = graph_.poses();
+  const Pose2 since_loss = between(poses[static_cast<size_t>(lost_since_)], poses[static_cast<size_t>(current.index)]);
+  std::vector<Pose2> hypotheses;
+  for (const Pose2& step : usualSteps()) {
+    Pose2 steps;
+    for (int k = 1; k <= std::max(1, checks.repetition_max_steps); ++k) {
+      steps = steps * step;
+      hypotheses.push_back(steps * since_loss);
+    }
+    for (const Pose2& turn : turnHypotheses(step, checks.bridge_search_turn_deg * M_PI / 180.0)) hypotheses.push_back(turn * since_loss);
+  }
+  MotionSearchSettings settings;
+  settings.radius_m = checks.bridge_search_radius_m;
+  settings.ratio = config_.matching.ratio;
+  settings.max_hamming = checks.bridge_search_max_hamming;
+  settings.turn_margin_rad = checks.bridge_search_turn_deg * M_PI / 180.0;
+  settings.max_rival_share = checks.max_ambiguity;
+  const Keyframe& tracked = *tracked_keyframe_;
+  const auto found = searchMotion(current.features, tracked.features, hypotheses, settings, odometry_fitting_,
+                                  [&](std::vector<Match> matches) { return withoutRobotArtifacts(std::move(matches), tracked, current); });
+  if (!found || found->fit.ambiguity() > checks.max_ambiguity) return std::nullopt;
+  return Bridge{found->fit.T_target_source, found->fit.covariance};
+}
+
+std::optional<Slam::Bridge> Slam::confirmedSearch(const Keyframe& current) {
+  const std::optional<Bridge> found = bridgeBySearch(current);
+  if (!found) return std::nullopt;
+  const std::optional<PendingBridge> earlier = pending_search_;
+  pending_search_ = PendingBridge{current.index, *found};
+  if (!earlier || earlier->frame < lost_since_) return std::nullopt;  // none yet in this lost segment
+  // A look-alike found twice lands at two unrelated places; the true motion, carried forward by odometry, agrees.
+  const std::vector<Pose2>& poses = graph_.poses();
+  const Pose2 carried = earlier->bridge.T_tracked_current *
+                        between(poses[static_cast<size_t>(earlier->frame)], poses[static_cast<size_t>(current.index)]);
+  const Pose2 disagreement = carried.inverse() * found->T_tracked_current;
+  const OdometryChecks& checks = config_.odometry_checks;
+  if (disagreement.translation().norm() > checks.bridge_search_agreement_m ||
+      std::abs(disagreement.theta) > checks.bridge_search_agreement_deg * M_PI / 180.0) {
+    return std::nullopt;
+  }
+  pending_search_.reset();
+  graph_.addEdge({tracked_frame_, earlier->frame, earlier->bridge.T_tracked_current,
+                  informationFrom(earlier->bridge.covariance, config_.graph.min_sigma_m, config_.graph.min_sigma_rad), true});
+  return found;
 }
 
 }  // namespace groundslam
