@@ -13,6 +13,7 @@
 #include "groundslam/core/ImageAlignment.hpp"
 #include "groundslam/core/Matching.hpp"
 #include "groundslam/core/MotionPrior.hpp"
+#include "groundslam/core/MotionSearch.hpp"
 #include "groundslam/core/NearestDescriptors.hpp"
 #include "groundslam/core/MountEstimation.hpp"
 #include "groundslam/core/MountSmoother.hpp"
@@ -236,6 +237,24 @@ void BM_LoopVerificationMatching(benchmark::State& state) {
   state.counters["matches"] = static_cast<double>(matchNearby(b, a, estimate, 0.025, 0.7).size());
 }
 BENCHMARK(BM_LoopVerificationMatching)->Unit(benchmark::kMillisecond);
+
+void BM_MotionSearch(benchmark::State& state) {
+  // A bridging frame's search (odometry.bridge_search_*): per usual step, 8 step counts and 72 turns on the spot,
+  // each guiding the matching within 8 mm (two usual steps right after a turn: 160 hypotheses).
+  const GroundFeatures a = groundFeatures(frames().first), b = groundFeatures(frames().second);
+  const Pose2 step = frames().simulator_truth_a_b;
+  std::vector<Pose2> hypotheses;
+  for (int usual = 0; usual < 2; ++usual) {
+    Pose2 steps;
+    for (int k = 1; k <= 8; ++k) hypotheses.push_back(steps = steps * step);
+    for (const Pose2& turn : turnHypotheses(step, 5.0 * M_PI / 180.0)) hypotheses.push_back(turn);
+  }
+  const FitSettings fitting;
+  for (auto _ : state) benchmark::DoNotOptimize(searchMotion(b, a, hypotheses, MotionSearchSettings{}, fitting));
+  const auto found = searchMotion(b, a, hypotheses, MotionSearchSettings{}, fitting);
+  state.counters["inliers"] = found ? static_cast<double>(found->fit.inliers) : 0.0;
+}
+BENCHMARK(BM_MotionSearch)->Unit(benchmark::kMillisecond);
 
 void BM_IlluminationFlattening(benchmark::State& state) {
   // state.range(0) = 1: an image with a glare patch (flattened); 0: even light (only the check runs).
