@@ -153,3 +153,14 @@ TEST(ConfigYaml, ShippedDefaultFileMatchesTheDefaultsInCode) {
   }
   EXPECT_EQ(text, configToYaml(shipped));
 }
+
+
+TEST(ConfigYaml, ASearchStepBelowADegreeIsRefusedWithItsKey) {
+  // bridge_search_turn_deg tries a turn every so many degrees round the circle: 0.5 would try 720 per usual step.
+  std::string m = inputErrorOf([&] { load(std::string(kCameraYaml) + "odometry:\n  bridge_search_turn_deg: 0.5\n"); });
+  EXPECT_NE(m.find("odometry.bridge_search_turn_deg"), std::string::npos) << m;
+  m = inputErrorOf([&] { load(std::string(kCameraYaml) + "odometry:\n  bridge_search_turn_deg: 45\n"); });
+  EXPECT_NE(m.find("odometry.bridge_search_turn_deg"), std::string::npos) << m;
+  EXPECT_NO_THROW(load(std::string(kCameraYaml) + "odometry:\n  bridge_search_turn_deg: 0\n"));
+  EXPECT_NO_THROW(load(std::string(kCameraYaml) + "odometry:\n  bridge_search_turn_deg: 1\n"));
+}

@@ -302,7 +302,7 @@ TEST(Relocalization, AQuarterTurnLostOnCarpetUnderTheOutdoorLookIsFoundBySearchi
   // Carpet with the outdoor look (a shadow turning with the heading, lens dirt, glare, a bumper, a rocking mount,
   // motion blur); frame 3 dropped. Frame 39 turns 91.8 degrees on the spot: brute-force matching keeps 12 pairs
   // and the frame is lost. Searching the turns every 5 degrees after one usual step finds it at frames 39 and 40
-  // alike (carried by odometry), so frame 40 joins the map. With the search off the robot stays lost a quarter
+  // alike (carried by odometry), so frame 40 joins the map and frame 39 falls into place with it. With the search off the robot stays lost a quarter
   // turn off.
   sim::SimulationSettings s;
   s.texture_kind = "carpet";
@@ -334,6 +334,11 @@ TEST(Relocalization, AQuarterTurnLostOnCarpetUnderTheOutdoorLookIsFoundBySearchi
   EXPECT_EQ(searched[39], FrameStatus::lost);
   EXPECT_EQ(searched[40], FrameStatus::relocalized);
   for (size_t k = 41; k < searched.size(); ++k) EXPECT_NE(searched[k], FrameStatus::lost) << k;
+  // The lost frame itself sits where the truth puts it too (its odometry to frame 40 carries the bridge back).
+  const Pose2 turned = between(found[38].T_world_robot, found[39].T_world_robot);
+  const Pose2 true_turn = between(simulator.groundTruth()[size_t(image(38))], simulator.groundTruth()[size_t(image(39))]);
+  EXPECT_LT((turned.translation() - true_turn.translation()).norm(), 0.008);
+  EXPECT_LT(std::abs(wrapAngle(turned.theta - true_turn.theta)), 0.3 * M_PI / 180.0);
   const Pose2 joined = between(found[38].T_world_robot, found[45].T_world_robot);
   EXPECT_LT((joined.translation() - true_motion.translation()).norm(), 0.008);
   EXPECT_LT(std::abs(wrapAngle(joined.theta - true_motion.theta)), 0.3 * M_PI / 180.0);

@@ -23,8 +23,8 @@ struct MotionSearchSettings {
   double ratio = 0.7;        ///< ratio test among the features in the window
   int max_hamming = 80;      ///< a closer pair only is a match, bits
   double turn_margin_rad = 5.0 * 0.017453292519943295;  ///< a fit turns at most this far from its hypothesis
-  /// Fits further apart than these are distinct: the best must have more than 1 / max_rival_share times the
-  /// inliers of every distinct one.
+  /// Fits further apart than these are distinct: no distinct one may have more than max_rival_share of the best's
+  /// inliers.
   double distinct_m = 0.01;
   double distinct_rad = 10.0 * 0.017453292519943295;
   double max_rival_share = 0.5;
@@ -39,9 +39,10 @@ struct MotionSearchResult {
 /// Filters a hypothesis's matches before the fit (e.g. the robot's own artifacts); identity when empty.
 using MatchFilter = std::function<std::vector<Match>(std::vector<Match>)>;
 
-/// Each hypothesis T_train_query guides the matching; its matches are fitted around it (`fitting`). The fit with
-/// the most inliers, when it has at least fitting.min_inliers and no distinct fit has max_rival_share of them;
-/// otherwise nothing. Failure is data, never an exception.
+/// Each hypothesis T_train_query guides the matching; its matches are fitted around it (`fitting`; a hypothesis
+/// whose matches are too few to beat or rival the best fit is not fitted). The fit with the most inliers, when it
+/// has at least fitting.min_inliers and no distinct fit has more than max_rival_share of them; otherwise nothing.
+/// Failure is data, never an exception.
 std::optional<MotionSearchResult> searchMotion(const GroundFeatures& query, const GroundFeatures& train,
                                                const std::vector<Pose2>& hypotheses, const MotionSearchSettings& settings,
                                                const FitSettings& fitting, const MatchFilter& filter = {});

@@ -164,7 +164,7 @@ struct OdometryChecks {
   /// the last tracked frame are searched (core/MotionSearch.hpp): one usual step and a turn on the spot, every
   /// this many degrees, or 1 to repetition_max_steps usual steps. The loss frame is searched too; two frames'
   /// results must agree through the lost segment's odometry. 0: off.
-  double bridge_search_turn_deg = 5.0;
+  double bridge_search_turn_deg = 5.0;  ///< 0, or 1 to 30 (a finer step multiplies the hypotheses)
   double bridge_search_radius_m = 0.008;  ///< features compared within this of where a hypothesis puts them
   int bridge_search_max_hamming = 80;     ///< a pair further apart is no match, bits
   double bridge_search_agreement_m = 0.01;   ///< two frames' searched motions agree within this,
@@ -331,8 +331,8 @@ void visitConfigFields(Config_& c, Visitor&& v) {
   v("odometry", "repetition_support_ratio", c.odometry_checks.repetition_support_ratio, kNonNegative);
   v("odometry", "restart_map_below_frames", c.odometry_checks.restart_map_below_frames, Range{0, 1e9});
   v("odometry", "bridge_max_frames", c.odometry_checks.bridge_max_frames, Range{0, 1000});
-  v("odometry", "bridge_search_turn_deg", c.odometry_checks.bridge_search_turn_deg, Range{0.0, 180.0});
-  v("odometry", "bridge_search_radius_m", c.odometry_checks.bridge_search_radius_m, kPositive);
+  v("odometry", "bridge_search_turn_deg", c.odometry_checks.bridge_search_turn_deg, Range{0.0, 30.0});
+  v("odometry", "bridge_search_radius_m", c.odometry_checks.bridge_search_radius_m, Range{0.0, 0.05, true});
   v("odometry", "bridge_search_max_hamming", c.odometry_checks.bridge_search_max_hamming, Range{0, 256});
   v("odometry", "bridge_search_agreement_m", c.odometry_checks.bridge_search_agreement_m, kPositive);
   v("odometry", "bridge_search_agreement_deg", c.odometry_checks.bridge_search_agreement_deg, kPositive);

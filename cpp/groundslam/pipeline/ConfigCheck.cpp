@@ -105,6 +105,14 @@ std::optional<ConfigProblem> pyramidProblem(const Config& config) {
   return ConfigProblem{"features.num_levels", msg.str()};
 }
 
+/// The search of a bridging frame tries a turn every bridge_search_turn_deg round the circle: a step under a degree
+/// would try thousands per frame.
+std::optional<ConfigProblem> searchProblem(const OdometryChecks& checks) {
+  const double step = checks.bridge_search_turn_deg;
+  if (step == 0.0 || step >= 1.0) return std::nullopt;
+  return ConfigProblem{"odometry.bridge_search_turn_deg", "value " + std::to_string(step) + " is below 1 degree; use 0 (off) or 1 to 30"};
+}
+
 }  // namespace
 
 std::optional<std::string> rangeProblem(double value, const Range& range) {
@@ -122,6 +130,7 @@ std::optional<ConfigProblem> findConfigProblem(const Config& config) {
   visitConfigFields(config, ranges);
   if (ranges.problem) return ranges.problem;
   if (auto problem = mountProblem(config.camera)) return problem;
+  if (auto problem = searchProblem(config.odometry_checks)) return problem;
   return pyramidProblem(config);
 }
 

@@ -232,6 +232,7 @@ void Slam::startSegment(const OdometryEdge& failed) {
   // what a loop closure would, over the time between the two frames.
   bridgeable_loss_ = (tooLittleEvidence(failed.fit_status) || failed.fit_status == FitStatus::implausible_motion) && !repeatedFloor(to);
   loop_closer_->trackingLost(graph_.poses());
+  pending_search_.reset();
   ever_lost_ = true;
   ++segment_;
   lost_ = true;
@@ -265,6 +266,7 @@ void Slam::relocalize(const Keyframe& current, FrameResult& result) {
 void Slam::joinMap(FrameResult& result) {
   // The frames since the loss snap into place: the whole graph is optimised now.
   segment_ = kMapSegment;
+  pending_search_.reset();
   for (size_t i = static_cast<size_t>(lost_since_); i < measured_.size(); ++i) measured_[i] = true;
   lost_ = false;
   result.status = FrameStatus::relocalized;
