@@ -142,8 +142,9 @@ class Slam {
   /// The current frame's motion from the last tracked frame, searched among the motions the robot can have made
   /// at the loss frame (core/MotionSearch.hpp, odometry.bridge_search_*) followed by the lost segment's odometry.
   std::optional<Bridge> bridgeBySearch(const Keyframe& current) const;
-  /// A searched bridge once an earlier frame's, carried forward by the lost segment's odometry, agrees with it;
-  /// until then the search waits in pending_search_ (cleared when a segment starts or joins the map).
+  /// A searched bridge once an earlier frame's, carried forward by the lost segment's odometry, agrees with it
+  /// (that one's edge is added then); until then the search waits in pending_search_ (cleared when a segment starts
+  /// or joins the map).
   std::optional<Bridge> confirmedSearch(const Keyframe& current);
   struct PendingBridge {
     int frame = -1;
