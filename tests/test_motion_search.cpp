@@ -73,6 +73,17 @@ std::pair<GroundFeatures, GroundFeatures> twoImages(const Pose2& T_train_query, 
   return {train, query};
 }
 
+/// Nothing is believed among `hypotheses`; with rivals allowed a chance fit is returned, with a rival over half its
+/// inliers: the rival test is what refuses it.
+void expectOnlyChanceFits(const GroundFeatures& query, const GroundFeatures& train, const std::vector<Pose2>& hypotheses) {
+  EXPECT_FALSE(searchMotion(query, train, hypotheses, MotionSearchSettings{}, FitSettings{}).has_value());
+  MotionSearchSettings lenient;
+  lenient.max_rival_share = 1.01;
+  const auto chance = searchMotion(query, train, hypotheses, lenient, FitSettings{});
+  ASSERT_TRUE(chance.has_value());
+  EXPECT_GT(chance->rival_inliers, chance->fit.inliers / 2);
+}
+
 TEST(MotionSearch, AQuarterTurnOnTheSpotIsFoundAmongTheTurnsEveryFiveDegrees) {
   // The robot stepped 1.2 cm and turned 91.8 degrees; 30 of 800 features per image are ground both show. The
   // hypotheses 90 and 95 degrees put them within the window; the fit recovers the motion to keypoint noise.
@@ -93,25 +104,14 @@ TEST(MotionSearch, NothingIsFoundWhereNoHypothesisIsNearTheMotion) {
   const auto [train, query] = twoImages(Pose2(0.0119, 0.0030, 91.8 * kDeg), 30, 800, 7);
   std::vector<Pose2> near_straight;
   for (int d = -30; d <= 30; d += 5) near_straight.emplace_back(0.01, 0.0, d * kDeg);
-  EXPECT_FALSE(searchMotion(query, train, near_straight, MotionSearchSettings{}, FitSettings{}).has_value());
-  MotionSearchSettings lenient;
-  lenient.max_rival_share = 1.01;
-  const auto chance = searchMotion(query, train, near_straight, lenient, FitSettings{});
-  ASSERT_TRUE(chance.has_value());
-  EXPECT_GT(chance->rival_inliers, chance->fit.inliers / 2);
+  expectOnlyChanceFits(query, train, near_straight);
 }
 
 TEST(MotionSearch, TwoImagesWithNoGroundInCommonGiveNoMotion) {
   // Only look-alikes (every window holds pairs within 80 bits): chance fits over the full circle of turns, none
   // standing out, so none is believed; with rivals allowed one is returned.
-  const std::vector<Pose2> turns = turnHypotheses(Pose2(0.01, 0.0, 0.0), 5.0 * kDeg);
   const auto [train, query] = twoImages(Pose2(), 0, 800, 11);
-  EXPECT_FALSE(searchMotion(query, train, turns, MotionSearchSettings{}, FitSettings{}).has_value());
-  MotionSearchSettings lenient;
-  lenient.max_rival_share = 1.01;
-  const auto chance = searchMotion(query, train, turns, lenient, FitSettings{});
-  ASSERT_TRUE(chance.has_value());
-  EXPECT_GT(chance->rival_inliers, chance->fit.inliers / 2);
+  expectOnlyChanceFits(query, train, turnHypotheses(Pose2(0.01, 0.0, 0.0), 5.0 * kDeg));
 }
 
 TEST(MotionSearch, AMotionThatTwoDistinctHypothesesExplainAlikeIsRefused) {

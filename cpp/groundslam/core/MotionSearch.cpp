@@ -21,7 +21,7 @@ std::optional<MotionSearchResult> searchMotion(const GroundFeatures& query, cons
   std::stable_sort(gathered.begin(), gathered.end(), [](const auto& a, const auto& b) { return a.second.size() > b.second.size(); });
   std::vector<MotionSearchResult> found;
   int most_inliers = 0;
-  for (auto& [hypothesis, matches] : gathered) {
+  for (const auto& [hypothesis, matches] : gathered) {
     const double could_have = static_cast<double>(matches.size());
     if (could_have < static_cast<double>(most_inliers) && could_have <= settings.max_rival_share * most_inliers) break;
     std::vector<Eigen::Vector2d> train_points, query_points;
@@ -33,7 +33,7 @@ std::optional<MotionSearchResult> searchMotion(const GroundFeatures& query, cons
     RigidEstimate fit = fitRigidTransform(train_points, query_points, fitting, around);
     if (!fit.ok()) continue;
     most_inliers = std::max(most_inliers, fit.inliers);
-    found.push_back({std::move(fit), std::move(matches), 0});
+    found.push_back({std::move(fit), 0});
   }
   if (found.empty()) return std::nullopt;
   const auto best = std::max_element(found.begin(), found.end(),

@@ -32,7 +32,6 @@ struct MotionSearchSettings {
 
 struct MotionSearchResult {
   RigidEstimate fit;           ///< T_train_query: maps query points onto train points
-  std::vector<Match> matches;  ///< the matches it was fitted to
   int rival_inliers = 0;       ///< the most inliers of a distinct hypothesis's fit
 };
 

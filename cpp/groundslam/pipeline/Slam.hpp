@@ -146,11 +146,6 @@ class Slam {
   /// (that one's edge is added then); until then the search waits in pending_search_ (cleared when a segment starts
   /// or joins the map).
   std::optional<Bridge> confirmedSearch(const Keyframe& current);
-  struct PendingBridge {
-    int frame = -1;
-    Bridge bridge;
-  };
-  std::optional<PendingBridge> pending_search_;
   /// The current segment joins the map (a relocalization): its frames count as measured, the graph is optimised.
   void joinMap(FrameResult& result);
   /// The pixel warp (current image to previous) a ground motion T_prev_curr makes, and the ground motion of a warp;
@@ -301,6 +296,12 @@ class Slam {
   /// Tracking was lost for too little evidence or for the robot's speed on a floor that does not repeat: bridgeLoss
   /// may join it.
   bool bridgeable_loss_ = false;
+  /// A searched bridge waiting for a later frame's to agree with it (confirmedSearch).
+  struct PendingBridge {
+    int frame = -1;
+    Bridge bridge;
+  };
+  std::optional<PendingBridge> pending_search_;
   std::deque<Pose2> recent_steps_;  ///< the last kRecentSteps good motions, a gap's shared among its steps
   size_t steps_since_turn_ = 0;     ///< good motions since the last sharp turn (recent_steps_ before it point elsewhere)
   std::optional<std::pair<Pose2, double>> before_turn_;  ///< the usual step before the last sharp turn, and its turn

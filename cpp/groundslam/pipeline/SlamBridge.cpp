@@ -23,8 +23,10 @@ void Slam::bridgeLoss(const Keyframe& current, const AlignmentImage& alignment, 
   StageTimer timer;
   std::optional<Bridge> bridge;
   // The loss frame itself has just failed against the last tracked frame: only the search can say more of it.
-  if (frames_since >= 2) bridge = bridgeByFeatures(current);
-  if (!bridge && frames_since >= 2) bridge = bridgeByAlignment(current, alignment);
+  if (frames_since >= 2) {
+    bridge = bridgeByFeatures(current);
+    if (!bridge) bridge = bridgeByAlignment(current, alignment);
+  }
   if (!bridge) bridge = confirmedSearch(current);
   result.times.loop_ms += timer.lap();
   if (!bridge) return;
