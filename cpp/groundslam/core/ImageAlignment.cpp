@@ -124,16 +124,58 @@ cv::Mat movingPixels(const cv::Mat& previous, const cv::Mat& current, const cv::
   return moving;
 }
 
+namespace {
+
+/// The two images with what stayed still blanked (and the mask of the rest): neither side's artifacts can pull the
+/// warp to rest.
+struct GroundPixels {
+  cv::Mat previous, current, moving;
+};
+
+GroundPixels groundPixels(const AlignmentImage& previous, const AlignmentImage& current, const cv::Matx23d& expected,
+                          const ImageAlignmentSettings& settings) {
+  GroundPixels ground;
+  ground.moving = movingPixels(previous.pixels, current.pixels, toReducedPixels(expected, previous.scale), settings.still_correlation);
+  ground.previous = cv::Mat::zeros(previous.pixels.size(), CV_32F);
+  ground.current = ground.previous.clone();
+  previous.pixels.copyTo(ground.previous, ground.moving);
+  current.pixels.copyTo(ground.current, ground.moving);
+  return ground;
+}
+
+bool alignable(const AlignmentImage& previous, const AlignmentImage& current) {
+  return !previous.pixels.empty() && previous.pixels.size() == current.pixels.size() && previous.scale == current.scale;
+}
+
+}  // namespace
+
+ImageAlignment refineAlignment(const AlignmentImage& previous, const AlignmentImage& current, const cv::Matx23d& start,
+                               const ImageAlignmentSettings& settings) {
+  ImageAlignment refined;
+  if (!alignable(previous, current)) return refined;
+  GroundPixels ground = groundPixels(previous, current, start, settings);
+  const int margin = static_cast<int>(settings.refine_border_fraction * ground.moving.cols);
+  if (2 * margin >= std::min(ground.moving.cols, ground.moving.rows)) return refined;
+  cv::Mat inside = cv::Mat::zeros(ground.moving.size(), CV_8U);
+  inside(cv::Rect(margin, margin, ground.moving.cols - 2 * margin, ground.moving.rows - 2 * margin)).setTo(255);
+  cv::bitwise_and(ground.moving, inside, ground.moving);
+  const auto solution = eccFrom(ground.previous, ground.current, ground.moving, toReducedPixels(start, previous.scale), settings.max_iterations);
+  if (!solution) return refined;
+  refined.converged = true;
+  refined.correlation = solution->second;
+  refined.rest_correlation = maskedCorrelation(ground.previous, ground.current, ground.moving, 0.0);
+  refined.W_previous_current = toOriginalPixels(solution->first, previous.scale);
+  return refined;
+}
+
 ImageAlignment alignImages(const AlignmentImage& previous, const AlignmentImage& current, const std::vector<cv::Matx23d>& starts,
                            const ImageAlignmentSettings& settings) {
   ImageAlignment best;
-  if (previous.pixels.empty() || previous.pixels.size() != current.pixels.size() || previous.scale != current.scale) return best;
-  if (starts.empty()) return best;
-  // What stayed still is blanked in both images (and masked): neither side's artifacts can pull the warp to rest.
-  const cv::Mat moving = movingPixels(previous.pixels, current.pixels, toReducedPixels(starts.front(), previous.scale), settings.still_correlation);
-  cv::Mat previous_ground = cv::Mat::zeros(previous.pixels.size(), CV_32F), current_ground = previous_ground.clone();
-  previous.pixels.copyTo(previous_ground, moving);
-  current.pixels.copyTo(current_ground, moving);
+  if (!alignable(previous, current) || starts.empty()) return best;
+  const GroundPixels ground = groundPixels(previous, current, starts.front(), settings);
+  const cv::Mat& previous_ground = ground.previous;
+  const cv::Mat& current_ground = ground.current;
+  const cv::Mat& moving = ground.moving;
 
   std::optional<cv::Matx23d> best_reduced;
   for (const cv::Matx23d& start : starts) {

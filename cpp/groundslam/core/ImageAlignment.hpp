@@ -21,6 +21,10 @@ struct ImageAlignmentSettings {
   /// Starts this far (reduced pixels) from the best solution must come back to it: a solution that depends on
   /// where the alignment started is not a measurement.
   double probe_px = 3.0;
+  /// refineAlignment leaves out a margin of this share of the width along every border: the background light's
+  /// blur reflects the image at its borders, a pattern fixed in the image that pulls the warp toward rest
+  /// (measured: 1.4% of a 14 degree turn lost without it, none with a tenth of the width).
+  double refine_border_fraction = 0.1;
 };
 
 /// An image as the alignment uses it: reduced, its background light removed (CV_32F).
@@ -53,6 +57,12 @@ cv::Mat movingPixels(const cv::Mat& previous, const cv::Mat& current, const cv::
 /// first start is the expected motion that still parts are told by (movingPixels).
 ImageAlignment alignImages(const AlignmentImage& previous, const AlignmentImage& current, const std::vector<cv::Matx23d>& starts,
                            const ImageAlignmentSettings& settings);
+
+/// One alignment of `current` onto `previous` from `start` (original pixels, current to previous), what stays still
+/// left out as by alignImages, without probes (spread_px 0): a motion already known to a pixel or two, made precise
+/// by every textured pixel rather than the keypoints alone.
+ImageAlignment refineAlignment(const AlignmentImage& previous, const AlignmentImage& current, const cv::Matx23d& start,
+                               const ImageAlignmentSettings& settings);
 
 /// Turns of the image about `centre_px` (original pixels: where the robot's origin is seen, about which a turn on
 /// the spot turns the image) that make the two images most alike, tried every `step_deg` on images reduced four

@@ -84,6 +84,11 @@ FrameResult Slam::process(PreparedFrame prepared) {
     const bool artifacts_seen = result.still_matches > 0 || artifact_mask_.artifactCells() > 0;
     if (!odometry.fallback && artifacts_seen) still = stillFeatures(*previous_, current, odometry.T_prev_curr);
     if (!odometry.fallback && !odometry.aligned && config_.outdoor.estimate_mount) estimateMountOf(*previous_, current, odometry, result);
+    if (!odometry.fallback && !odometry.aligned && !odometry.low_overlap) {
+      StageTimer timer;
+      refineHeadingByImages(odometry, current, prepared.alignment);
+      result.times.fit_ms += timer.lap();
+    }
     result.odometry = odometry.T_prev_curr;
     rocking_steps_.resize(static_cast<size_t>(frame) + 1, 1.0);
     // Only a gap counts: between frames the mount rocks as it does at any speed (measured: with every speed change

@@ -120,6 +120,9 @@ class Slam {
   /// (odometry.align_check_*). On a floor that repeats the images only confirm (its rivals judge the fit).
   FitCheck checkedByAlignment(const Pose2& fitted, int inliers, const std::vector<Match>& used, const Keyframe& previous,
                               const Keyframe& current, const AlignmentImage& alignment, bool repeated_floor) const;
+  /// The odometry's heading refined by aligning the images from its motion (odometry.align_heading_sigma_deg); the
+  /// translation follows so that the current inliers' centroid stays where the fit put it.
+  void refineHeadingByImages(OdometryEdge& odometry, const Keyframe& current, const AlignmentImage& alignment);
   /// An edge measured by aligning the images: T_prev_curr with odometry.align_sigma_* as its covariance.
   OdometryEdge alignedEdge(const Pose2& T_prev_curr) const;
   /// An alignment that passes odometry.align_* (correlation, better than rest, probes' spread).
@@ -152,6 +155,8 @@ class Slam {
   /// both through the calibrated camera, over a grid of the image's pixels.
   cv::Matx23d imageWarpOf(const Pose2& T_prev_curr) const;
   Pose2 groundMotionOf(const cv::Matx23d& W_previous_current) const;
+  /// The same with each frame's pixels projected with its own mount (tilt and height).
+  Pose2 groundMotionOf(const cv::Matx23d& W_previous_current, const MountState& previous_mount, const MountState& current_mount) const;
   /// The robust refinement alone from a transform known to within a few millimetres (see refineRigidTransform).
   RigidEstimate refineMatches(const std::vector<Match>& matches, const Keyframe& previous, const Keyframe& current,
                               const Pose2& initial) const;
@@ -263,6 +268,10 @@ class Slam {
     double keep(double square, double variance, int count);
   };
   Spread tilt_spread_, height_spread_;
+  /// How far the images' heading is from the keypoints' (running mean of the squared difference) against the
+  /// keypoint fits' own heading variance: what is left over is the images' variance (refineHeadingByImages).
+  Spread image_heading_;
+  int image_headings_ = 0;
   int mount_estimates_ = 0;
   std::vector<FrameMountFactor> mount_factors_;  ///< every mount estimate's factor (graph frames)
   std::vector<MountState> used_mounts_;        ///< per graph frame: the mount its points were projected with

@@ -1,6 +1,7 @@
 // Not in the paper: odometry by aligning the images themselves where a floor gives too few keypoints, and weak
 // fits checked by them (core/ImageAlignment.hpp); the rest of Slam is in Slam.cpp.
 #include <algorithm>
+#include <cmath>
 #include <vector>
 
 #include "groundslam/pipeline/Slam.hpp"
@@ -54,6 +55,27 @@ Pose2 Slam::groundMotionOf(const cv::Matx23d& W_previous_current) const {
   return leastSquaresRigid(previous_ground, current_ground);
 }
 
+Pose2 Slam::groundMotionOf(const cv::Matx23d& W_previous_current, const MountState& previous_mount,
+                           const MountState& current_mount) const {
+  std::vector<Eigen::Vector2d> current_pixels, previous_pixels;
+  for (const Eigen::Vector2d& pixel : imageGrid(camera_.intrinsics())) {
+    const cv::Vec2d seen_before = W_previous_current * cv::Vec3d(pixel.x(), pixel.y(), 1.0);
+    current_pixels.push_back(pixel);
+    previous_pixels.emplace_back(seen_before[0], seen_before[1]);
+  }
+  const std::vector<Eigen::Vector2d> current_rays = camera_.normalisedRays(current_pixels), previous_rays = camera_.normalisedRays(previous_pixels);
+  const Eigen::Isometry3d previous_camera = mountFor(calibrated_mount_, previous_mount), current_camera = mountFor(calibrated_mount_, current_mount);
+  std::vector<Eigen::Vector2d> current_ground, previous_ground;
+  for (size_t i = 0; i < current_rays.size(); ++i) {
+    const auto current = CameraModel::intersectGround(current_rays[i], current_camera);
+    const auto previous = CameraModel::intersectGround(previous_rays[i], previous_camera);
+    if (!current || !previous) continue;
+    current_ground.push_back(*current);
+    previous_ground.push_back(*previous);
+  }
+  return leastSquaresRigid(previous_ground, current_ground);
+}
+
 bool Slam::believable(const ImageAlignment& aligned) const {
   const OdometryChecks& checks = config_.odometry_checks;
   // Explaining the images no better than rest is not a measurement of motion: the images' decorrelation at rest
@@ -94,6 +116,39 @@ std::optional<OdometryEdge> Slam::odometryByAlignment(const Keyframe& previous, 
   const Pose2 T_prev_curr = groundMotionOf(aligned->W_previous_current);
   if (!plausibleMotion(T_prev_curr, previous.timestamp, current.timestamp)) return std::nullopt;
   return alignedEdge(T_prev_curr);
+}
+
+void Slam::refineHeadingByImages(OdometryEdge& odometry, const Keyframe& current, const AlignmentImage& alignment) {
+  const OdometryChecks& checks = config_.odometry_checks;
+  if (!(checks.align_heading_sigma_deg > 0.0) || !checks.align_images || previous_alignment_.pixels.empty() ||
+      alignment.pixels.empty() || odometry.used.empty()) {
+    return;
+  }
+  const Pose2& fitted = odometry.T_prev_curr;
+  const ImageAlignment aligned = refineAlignment(previous_alignment_, alignment, imageWarpOf(fitted), alignment_settings_);
+  if (!aligned.converged || aligned.correlation < checks.align_min_correlation) return;
+  const Pose2 difference = fitted.inverse() * groundMotionOf(aligned.W_previous_current, previous_->mount, current.mount);
+  if (difference.translation().norm() > checks.align_check_m || std::abs(difference.theta) > checks.align_check_rad) return;
+  // The images' own variance is learnt from how far their heading is from the keypoints' (the keypoint fits' variance
+  // taken out) over the last 50 or so frames: a fine texture that the reduced images blur away, or motion blur at
+  // the turns, makes it large and the images count for little. align_heading_sigma_deg is its floor.
+  const double fit_variance = odometry.covariance(2, 2);
+  ++image_headings_;
+  image_heading_.keep(difference.theta * difference.theta, fit_variance, image_headings_);
+  constexpr int kLearnt = 10;
+  if (image_headings_ < kLearnt) return;
+  const double image_variance = std::max(std::pow(checks.align_heading_sigma_deg * M_PI / 180.0, 2),
+                                         image_heading_.square_mean - image_heading_.variance_mean);
+  const double image_weight = fit_variance / (fit_variance + image_variance);
+  Eigen::Vector2d centroid = Eigen::Vector2d::Zero();
+  for (const Match& m : odometry.used) centroid += current.features.points[static_cast<size_t>(m.query)];
+  centroid /= static_cast<double>(odometry.used.size());
+  const Pose2 turned(0.0, 0.0, fitted.theta + image_weight * difference.theta);
+  const Eigen::Vector2d t = fitted.translation() + (fitted.rotation() - turned.rotation()) * centroid;
+  odometry.T_prev_curr = Pose2(t.x(), t.y(), turned.theta);
+  // The heading's variance is that of the combination, its covariance with the position shrinks alike.
+  odometry.covariance(2, 2) = fit_variance * image_variance / (fit_variance + image_variance);
+  for (int i = 0; i < 2; ++i) odometry.covariance(i, 2) = odometry.covariance(2, i) = (1.0 - image_weight) * odometry.covariance(i, 2);
 }
 
 OdometryEdge Slam::alignedEdge(const Pose2& T_prev_curr) const {
@@ -149,3 +204,4 @@ Slam::FitCheck Slam::checkedByAlignment(const Pose2& fitted, int inliers, const 
 }
 
 }  // namespace groundslam
+
