@@ -123,6 +123,11 @@ class Slam {
   /// The odometry's heading refined by aligning the images from its motion (odometry.align_heading_sigma_deg); the
   /// translation follows so that the current inliers' centroid stays where the fit put it.
   void refineHeadingByImages(OdometryEdge& odometry, const Keyframe& current, const AlignmentImage& alignment);
+  /// What the images say of a motion measured from the features, T_a_b (a: the earlier frame, its image and mount
+  /// given): the heading difference of the images' alignment from T_a_b, or nothing when the alignment fails
+  /// (no convergence, correlation below odometry.align_min_correlation, farther than align_check_m / _rad).
+  std::optional<double> imageHeadingDifference(const Pose2& T_a_b, const AlignmentImage& image_a, const MountState& mount_a,
+                                               const AlignmentImage& image_b, const MountState& mount_b) const;
   /// An edge measured by aligning the images: T_prev_curr with odometry.align_sigma_* as its covariance.
   OdometryEdge alignedEdge(const Pose2& T_prev_curr) const;
   /// An alignment that passes odometry.align_* (correlation, better than rest, probes' spread).
@@ -267,6 +272,10 @@ class Slam {
     /// Adds one estimate; returns the share of the departure to keep.
     double keep(double square, double variance, int count);
   };
+  /// Adds one difference of the images' heading from a fit's to `spread`; the images' heading variance learnt so far
+  /// (what the squared differences leave beyond the fits' own variance, odometry.align_heading_sigma_deg at least),
+  /// nothing while fewer than 10 differences are known.
+  std::optional<double> imageHeadingVariance(Spread& spread, int& count, double difference, double fit_variance) const;
   Spread tilt_spread_, height_spread_;
   /// How far the images' heading is from the keypoints' (running mean of the squared difference) against the
   /// keypoint fits' own heading variance: what is left over is the images' variance (refineHeadingByImages).

@@ -118,39 +118,6 @@ std::optional<OdometryEdge> Slam::odometryByAlignment(const Keyframe& previous, 
   return alignedEdge(T_prev_curr);
 }
 
-void Slam::refineHeadingByImages(OdometryEdge& odometry, const Keyframe& current, const AlignmentImage& alignment) {
-  const OdometryChecks& checks = config_.odometry_checks;
-  if (!(checks.align_heading_sigma_deg > 0.0) || !checks.align_images || previous_alignment_.pixels.empty() ||
-      alignment.pixels.empty() || odometry.used.empty()) {
-    return;
-  }
-  const Pose2& fitted = odometry.T_prev_curr;
-  const ImageAlignment aligned = refineAlignment(previous_alignment_, alignment, imageWarpOf(fitted), alignment_settings_);
-  if (!aligned.converged || aligned.correlation < checks.align_min_correlation) return;
-  const Pose2 difference = fitted.inverse() * groundMotionOf(aligned.W_previous_current, previous_->mount, current.mount);
-  if (difference.translation().norm() > checks.align_check_m || std::abs(difference.theta) > checks.align_check_rad) return;
-  // The images' own variance is learnt from how far their heading is from the keypoints' (the keypoint fits' variance
-  // taken out) over the last 50 or so frames: a fine texture that the reduced images blur away, or motion blur at
-  // the turns, makes it large and the images count for little. align_heading_sigma_deg is its floor.
-  const double fit_variance = odometry.covariance(2, 2);
-  ++image_headings_;
-  image_heading_.keep(difference.theta * difference.theta, fit_variance, image_headings_);
-  constexpr int kLearnt = 10;
-  if (image_headings_ < kLearnt) return;
-  const double image_variance = std::max(std::pow(checks.align_heading_sigma_deg * M_PI / 180.0, 2),
-                                         image_heading_.square_mean - image_heading_.variance_mean);
-  const double image_weight = fit_variance / (fit_variance + image_variance);
-  Eigen::Vector2d centroid = Eigen::Vector2d::Zero();
-  for (const Match& m : odometry.used) centroid += current.features.points[static_cast<size_t>(m.query)];
-  centroid /= static_cast<double>(odometry.used.size());
-  const Pose2 turned(0.0, 0.0, fitted.theta + image_weight * difference.theta);
-  const Eigen::Vector2d t = fitted.translation() + (fitted.rotation() - turned.rotation()) * centroid;
-  odometry.T_prev_curr = Pose2(t.x(), t.y(), turned.theta);
-  // The heading's variance is that of the combination, its covariance with the position shrinks alike.
-  odometry.covariance(2, 2) = fit_variance * image_variance / (fit_variance + image_variance);
-  for (int i = 0; i < 2; ++i) odometry.covariance(i, 2) = odometry.covariance(2, i) = (1.0 - image_weight) * odometry.covariance(i, 2);
-}
-
 OdometryEdge Slam::alignedEdge(const Pose2& T_prev_curr) const {
   OdometryEdge edge;
   edge.T_prev_curr = T_prev_curr;

@@ -1,0 +1,63 @@
+// Not in the paper: the heading of odometry edges refined by aligning the images themselves
+// (core/ImageAlignment.hpp refineAlignment). Every textured pixel measures the turn: at 160 pixels wide the images'
+// heading is right to about 0.01 degrees where the keypoints' is 0.02-0.04 (measured on the simulated floors). The
+// two headings are combined by their variances, the images' learnt over the run from how far they are from the
+// keypoints'.
+#include <algorithm>
+#include <cmath>
+
+#include "groundslam/pipeline/Slam.hpp"
+
+namespace groundslam {
+namespace {
+
+/// T's heading moved by `weight` of `difference` toward the images'; its translation so that `pivot` (a ground point
+/// of the later frame, where the fit is surest) stays where T put it; the heading's variance that of the combination.
+void combineHeading(Pose2& T, Eigen::Matrix3d& covariance, double difference, double image_variance, const Eigen::Vector2d& pivot) {
+  const double fit_variance = covariance(2, 2);
+  const double weight = fit_variance / (fit_variance + image_variance);
+  const Pose2 turned(0.0, 0.0, T.theta + weight * difference);
+  const Eigen::Vector2d t = T.translation() + (T.rotation() - turned.rotation()) * pivot;
+  T = Pose2(t.x(), t.y(), turned.theta);
+  covariance(2, 2) = fit_variance * image_variance / (fit_variance + image_variance);
+  for (int i = 0; i < 2; ++i) covariance(i, 2) = covariance(2, i) = (1.0 - weight) * covariance(i, 2);
+}
+
+constexpr int kLearntHeadings = 10;
+
+}  // namespace
+
+std::optional<double> Slam::imageHeadingDifference(const Pose2& T_a_b, const AlignmentImage& image_a, const MountState& mount_a,
+                                                   const AlignmentImage& image_b, const MountState& mount_b) const {
+  const OdometryChecks& checks = config_.odometry_checks;
+  const ImageAlignment aligned = refineAlignment(image_a, image_b, imageWarpOf(T_a_b), alignment_settings_);
+  if (!aligned.converged || aligned.correlation < checks.align_min_correlation) return std::nullopt;
+  const Pose2 difference = T_a_b.inverse() * groundMotionOf(aligned.W_previous_current, mount_a, mount_b);
+  if (difference.translation().norm() > checks.align_check_m || std::abs(difference.theta) > checks.align_check_rad) return std::nullopt;
+  return difference.theta;
+}
+
+std::optional<double> Slam::imageHeadingVariance(Spread& spread, int& count, double difference, double fit_variance) const {
+  // A fine texture that the reduced images blur away makes the images' variance large, and they count for little.
+  ++count;
+  spread.keep(difference * difference, fit_variance, count);
+  if (count < kLearntHeadings) return std::nullopt;
+  return std::max(std::pow(config_.odometry_checks.align_heading_sigma_deg * M_PI / 180.0, 2), spread.square_mean - spread.variance_mean);
+}
+
+void Slam::refineHeadingByImages(OdometryEdge& odometry, const Keyframe& current, const AlignmentImage& alignment) {
+  if (!(config_.odometry_checks.align_heading_sigma_deg > 0.0) || previous_alignment_.pixels.empty() || alignment.pixels.empty() ||
+      odometry.used.empty()) {
+    return;
+  }
+  const auto difference = imageHeadingDifference(odometry.T_prev_curr, previous_alignment_, previous_->mount, alignment, current.mount);
+  if (!difference) return;
+  const auto image_variance = imageHeadingVariance(image_heading_, image_headings_, *difference, odometry.covariance(2, 2));
+  if (!image_variance) return;
+  Eigen::Vector2d centroid = Eigen::Vector2d::Zero();  // of the fit's matches in this frame
+  for (const Match& m : odometry.used) centroid += current.features.points[static_cast<size_t>(m.query)];
+  centroid /= static_cast<double>(odometry.used.size());
+  combineHeading(odometry.T_prev_curr, odometry.covariance, *difference, *image_variance, centroid);
+}
+
+}  // namespace groundslam
