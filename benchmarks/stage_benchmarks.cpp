@@ -328,6 +328,28 @@ void BM_ImageAlignment(benchmark::State& state) {
 }
 BENCHMARK(BM_ImageAlignment)->Unit(benchmark::kMillisecond);
 
+void BM_HeadingRefinement(benchmark::State& state) {
+  // Paid by every measured frame where nothing stays still in the image (odometry.align_heading_sigma_deg): the still
+  // parts and one ECC run from the fit's motion (here the simulator's true motion moved by 2 pixels), no probes.
+  const ImageAlignmentSettings settings;
+  const AlignmentImage a = alignmentImage(frames().first, settings), b = alignmentImage(frames().second, settings);
+  std::vector<cv::Point2f> current_pixels{{400, 300}, {1200, 300}, {400, 900}}, previous_pixels;
+  for (const cv::Point2f& p : current_pixels) {
+    const auto ground = frames().camera.pixelToGround(Eigen::Vector2d(p.x, p.y));
+    const auto seen = frames().camera.groundToPixel(frames().simulator_truth_a_b * *ground);
+    previous_pixels.emplace_back(static_cast<float>(seen->x() + 2.0), static_cast<float>(seen->y()));
+  }
+  const cv::Matx23d start(cv::getAffineTransform(current_pixels, previous_pixels));
+  double correlation = 0.0;
+  for (auto _ : state) {
+    const ImageAlignment refined = refineAlignment(a, b, start, settings);
+    correlation = refined.correlation;
+    benchmark::DoNotOptimize(refined);
+  }
+  state.counters["correlation"] = correlation;
+}
+BENCHMARK(BM_HeadingRefinement)->Unit(benchmark::kMillisecond);
+
 void BM_MountEstimation(benchmark::State& state) {
   // One reference (the previous frame), the default 300 pairs; the pipeline uses up to three.
   const GroundFeatures a = groundFeatures(frames().first), b = groundFeatures(frames().second);
