@@ -163,7 +163,6 @@ ImageAlignment refineAlignment(const AlignmentImage& previous, const AlignmentIm
   if (!solution) return refined;
   refined.converged = true;
   refined.correlation = solution->second;
-  refined.rest_correlation = maskedCorrelation(ground.previous, ground.current, ground.moving, 0.0);
   refined.W_previous_current = toOriginalPixels(solution->first, previous.scale);
   return refined;
 }
