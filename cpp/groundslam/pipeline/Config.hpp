@@ -109,11 +109,13 @@ struct OdometryChecks {
   /// standard deviations (a fit of a dozen or two keypoints on a weak floor is a degree off one time in ten).
   /// 0: never.
   int align_confirm_below_inliers = 30;
-  /// Every measured motion (not a low-overlap, aligned or lost one) has its heading refined by aligning the images
-  /// from it: the keypoints' heading and the images' are combined by their variances, this being the images'
-  /// standard deviation (degrees; measured 0.007-0.011 at 160 pixels wide against the keypoints' 0.02-0.04). An
-  /// alignment that does not converge, correlates less than align_min_correlation or ends farther than
-  /// align_check_m / align_check_rad from the fit leaves it as it was. 0: off.
+  /// Every measured motion (not a low-overlap, aligned or lost one, nor where something stays still in the image)
+  /// has its heading refined by aligning the images from it: the keypoints' heading and the images' are combined by
+  /// their variances, the images' learnt over the run (the squared differences less the fits' own variance) and at
+  /// least this standard deviation (degrees; measured 0.007-0.011 at 160 pixels wide against the keypoints'
+  /// 0.02-0.04). Images less precise than the keypoints are not used. An alignment that does not converge,
+  /// correlates less than align_min_correlation or ends farther than align_check_m / align_check_rad from the fit
+  /// leaves it as it was. 0: off.
   double align_heading_sigma_deg = 0.01;
   /// A turn moves the ground by the camera's tilt error too: a tilt off by delta shifts every ground point by
   /// height * delta, and a turn by theta turns that shift into a translation error of 2 sin(theta / 2) * height *

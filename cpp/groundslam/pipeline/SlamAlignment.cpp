@@ -171,4 +171,3 @@ Slam::FitCheck Slam::checkedByAlignment(const Pose2& fitted, int inliers, const 
 }
 
 }  // namespace groundslam
-
