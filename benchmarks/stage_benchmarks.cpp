@@ -305,19 +305,24 @@ void BM_AlignmentImage(benchmark::State& state) {
 }
 BENCHMARK(BM_AlignmentImage)->Unit(benchmark::kMillisecond);
 
-void BM_ImageAlignment(benchmark::State& state) {
-  // Paid only by a frame whose features fail: the still parts, one start at the simulator's true motion moved by
-  // 2 pixels, and the four probes around the solution.
-  const ImageAlignmentSettings settings;
-  const AlignmentImage a = alignmentImage(frames().first, settings), b = alignmentImage(frames().second, settings);
-  // The true motion as a warp of current pixels to previous ones, through the camera, 2 pixels off.
+/// The simulator's true motion between the two frames as a warp of current pixels to previous ones, through the
+/// camera, 2 pixels off: where an alignment starts from.
+cv::Matx23d trueWarpTwoPixelsOff() {
   std::vector<cv::Point2f> current_pixels{{400, 300}, {1200, 300}, {400, 900}}, previous_pixels;
   for (const cv::Point2f& p : current_pixels) {
     const auto ground = frames().camera.pixelToGround(Eigen::Vector2d(p.x, p.y));
     const auto seen = frames().camera.groundToPixel(frames().simulator_truth_a_b * *ground);
     previous_pixels.emplace_back(static_cast<float>(seen->x() + 2.0), static_cast<float>(seen->y()));
   }
-  const cv::Matx23d start(cv::getAffineTransform(current_pixels, previous_pixels));
+  return cv::Matx23d(cv::getAffineTransform(current_pixels, previous_pixels));
+}
+
+void BM_ImageAlignment(benchmark::State& state) {
+  // Paid only by a frame whose features fail: the still parts, one start at the simulator's true motion moved by
+  // 2 pixels, and the four probes around the solution.
+  const ImageAlignmentSettings settings;
+  const AlignmentImage a = alignmentImage(frames().first, settings), b = alignmentImage(frames().second, settings);
+  const cv::Matx23d start = trueWarpTwoPixelsOff();
   double correlation = 0.0;
   for (auto _ : state) {
     const ImageAlignment aligned = alignImages(a, b, {start}, settings);
@@ -333,13 +338,7 @@ void BM_HeadingRefinement(benchmark::State& state) {
   // parts and one ECC run from the fit's motion (here the simulator's true motion moved by 2 pixels), no probes.
   const ImageAlignmentSettings settings;
   const AlignmentImage a = alignmentImage(frames().first, settings), b = alignmentImage(frames().second, settings);
-  std::vector<cv::Point2f> current_pixels{{400, 300}, {1200, 300}, {400, 900}}, previous_pixels;
-  for (const cv::Point2f& p : current_pixels) {
-    const auto ground = frames().camera.pixelToGround(Eigen::Vector2d(p.x, p.y));
-    const auto seen = frames().camera.groundToPixel(frames().simulator_truth_a_b * *ground);
-    previous_pixels.emplace_back(static_cast<float>(seen->x() + 2.0), static_cast<float>(seen->y()));
-  }
-  const cv::Matx23d start(cv::getAffineTransform(current_pixels, previous_pixels));
+  const cv::Matx23d start = trueWarpTwoPixelsOff();
   double correlation = 0.0;
   for (auto _ : state) {
     const ImageAlignment refined = refineAlignment(a, b, start, settings);

@@ -43,16 +43,8 @@ cv::Matx23d Slam::imageWarpOf(const Pose2& T_prev_curr) const {
 }
 
 Pose2 Slam::groundMotionOf(const cv::Matx23d& W_previous_current) const {
-  std::vector<Eigen::Vector2d> current_ground, previous_ground;
-  for (const Eigen::Vector2d& pixel : imageGrid(camera_.intrinsics())) {
-    const cv::Vec2d seen_before = W_previous_current * cv::Vec3d(pixel.x(), pixel.y(), 1.0);
-    const auto current = camera_.pixelToGround(pixel);
-    const auto previous = camera_.pixelToGround(Eigen::Vector2d(seen_before[0], seen_before[1]));
-    if (!current || !previous) continue;
-    current_ground.push_back(*current);
-    previous_ground.push_back(*previous);
-  }
-  return leastSquaresRigid(previous_ground, current_ground);
+  const MountState calibrated = calibratedState(calibrated_mount_);
+  return groundMotionOf(W_previous_current, calibrated, calibrated);
 }
 
 Pose2 Slam::groundMotionOf(const cv::Matx23d& W_previous_current, const MountState& previous_mount,
