@@ -252,10 +252,11 @@ MountEstimate estimateMount(const std::vector<MountObservation>& observations, c
     slot_of[k] = problem.addSlot({o.reference.height_m, Eigen::Vector2d(o.reference.roll_rad, o.reference.pitch_rad)});
     x.insert(x.end(), {o.reference.roll_rad, o.reference.pitch_rad, o.T_guess.x, o.T_guess.y, o.T_guess.theta});
     const size_t step = std::max<size_t>(1, n / static_cast<size_t>(std::max(1, settings.max_pairs)));
+    const double sigma_m = o.point_sigma_m > 0.0 ? o.point_sigma_m : settings.point_sigma_m;
     for (size_t i = 0; i < n; i += step) {
       const Eigen::Vector3d ref = R0 * Eigen::Vector3d(o.reference_rays[i].x(), o.reference_rays[i].y(), 1.0);
       const Eigen::Vector3d cur = R0 * Eigen::Vector3d(o.current_rays[i].x(), o.current_rays[i].y(), 1.0);
-      problem.addPair(slot_of[k], MountPairCost(ref, cur, centre_xy, settings.point_sigma_m));
+      problem.addPair(slot_of[k], MountPairCost(ref, cur, centre_xy, sigma_m));
     }
   }
   estimate.pairs = static_cast<int>(problem.pairs());

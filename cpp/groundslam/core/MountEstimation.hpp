@@ -67,6 +67,7 @@ struct MountObservation {
   std::vector<Eigen::Vector2d> reference_rays, current_rays;
   MountState reference;
   Pose2 T_guess;
+  double point_sigma_m = 0.0;  ///< noise of these pairs' points; 0: settings.point_sigma_m
 };
 
 /// Estimates the current frame's mount state from its matches to one or more reference frames. The

@@ -26,6 +26,7 @@ FramePreparer::FramePreparer(const Config& config)
       near_twin_max_distance_(config.features.near_twin_max_distance),
       decoder_reduction_(decoderReductionFor(config.camera.image_width, config.features.max_extraction_width)) {
   if (config.odometry_checks.align_images) alignment_ = alignmentSettingsFrom(config);
+  if (config.outdoor.estimate_mount && config.outdoor.track_points) tracking_ = PointTrackingSettings{};
 }
 
 PreparedFrame FramePreparer::prepare(const cv::Mat& image, double timestamp, int reduced_by) const {
@@ -37,6 +38,7 @@ PreparedFrame FramePreparer::prepare(const cv::Mat& image, double timestamp, int
   prepared.extract_ms = timer.lap();
   prepared.features = dropNearTwins(projectToGround(image_features, camera_), near_twin_max_distance_);
   if (alignment_) prepared.alignment = alignmentImage(image, *alignment_, reduced_by);
+  if (tracking_) prepared.tracking = trackingImage(image, *tracking_, reduced_by);
   prepared.project_ms = timer.lap();
   return prepared;
 }

@@ -12,6 +12,7 @@
 #include "groundslam/core/FeatureExtraction.hpp"
 #include "groundslam/core/ImageAlignment.hpp"
 #include "groundslam/core/Matching.hpp"
+#include "groundslam/core/PointTracking.hpp"
 #include "groundslam/pipeline/Config.hpp"
 
 namespace groundslam {
@@ -32,6 +33,8 @@ struct PreparedFrame {
   double match_ms = 0.0;
   /// The image reduced for aligning it with the next one where features are too few (odometry.align_images; empty when off).
   AlignmentImage alignment;
+  /// The image reduced for tracking its keypoints into the next one (outdoor.track_points; empty when off).
+  TrackingImage tracking;
 };
 
 /// The alignment settings a configuration describes (odometry.align_*).
@@ -55,6 +58,7 @@ class FramePreparer {
   int near_twin_max_distance_;
   int decoder_reduction_;
   std::optional<ImageAlignmentSettings> alignment_;  ///< empty: odometry.align_images is off
+  std::optional<PointTrackingSettings> tracking_;    ///< empty: outdoor.track_points (or estimate_mount) is off
 };
 
 }  // namespace groundslam

@@ -189,7 +189,12 @@ class Slam {
   std::optional<std::pair<RigidEstimate, std::vector<Match>>> fitLowOverlap(const Keyframe& previous, const Keyframe& current) const;
   /// The current frame's roll, pitch and height from the odometry's inliers; its points re-projected and the
   /// odometry fitted again with them. Leaves everything as it was when the estimate fails.
-  void estimateMountOf(const Keyframe& previous, Keyframe& current, OdometryEdge& odometry, FrameResult& result);
+  void estimateMountOf(const Keyframe& previous, Keyframe& current, OdometryEdge& odometry, const TrackingImage& tracking,
+                       FrameResult& result);
+  /// The previous frame's pairs with its side tracked from the current keypoints by the images (outdoor.track_points):
+  /// the observation the mount is estimated from, or nothing when too few points track.
+  std::optional<MountObservation> trackedObservation(const Keyframe& previous, const Keyframe& current, const std::vector<Match>& pairs,
+                                                     const Pose2& T_previous_current, const TrackingImage& tracking) const;
   /// A frame the mount is estimated against: the matches (current = query) and motion to it.
   struct MountReference {
     const Keyframe* keyframe = nullptr;
@@ -297,11 +302,15 @@ class Slam {
   PoseGraph graph_;
   std::optional<Keyframe> previous_;
   AlignmentImage previous_alignment_;  ///< the previous image as the alignment uses it (odometry.align_images)
+  TrackingImage previous_tracking_;    ///< the previous image as the point tracker uses it (outdoor.track_points)
+  int frames_without_artifacts_ = 0;   ///< consecutive frames without a still match or an artifact cell
+  static constexpr int kTrackAfterCleanFrames = 10;  ///< points are tracked only after this many such frames
   AlignmentImage tracked_alignment_;   ///< the last tracked frame's image, keyframe, graph index and time (bridgeLoss)
   std::optional<Keyframe> tracked_keyframe_;  ///< its features as projected with its mount (bridgeByFeatures)
   int tracked_frame_ = -1;
   double tracked_time_ = 0.0;
   ImageAlignmentSettings alignment_settings_;
+  PointTrackingSettings point_tracking_;  ///< outdoor.track_points
   std::optional<OdometryEdge> last_good_odometry_;
   /// The time between the two frames of last_good_odometry_; 0 after a failed frame (no speed to judge by).
   double last_good_odometry_seconds_ = 0.0;

@@ -6,6 +6,8 @@
 #include "groundslam/pipeline/Slam.hpp"
 #include "groundslam/pipeline/StageTimer.hpp"
 
+#include <opencv2/calib3d.hpp>
+
 namespace groundslam {
 namespace {
 
@@ -106,7 +108,48 @@ double Slam::Spread::keep(double square, double variance, int count) {
   return square_mean > 0.0 ? std::max(0.0, square_mean - variance_mean) / square_mean : 0.0;
 }
 
-void Slam::estimateMountOf(const Keyframe& previous, Keyframe& current, OdometryEdge& odometry, FrameResult& result) {
+std::optional<MountObservation> Slam::trackedObservation(const Keyframe& previous, const Keyframe& current, const std::vector<Match>& pairs,
+                                                        const Pose2& T_previous_current, const TrackingImage& tracking) const {
+  if (tracking.pixels.empty() || previous_tracking_.pixels.empty() || pairs.size() < 4) return std::nullopt;
+  // The keypoints' pixels (their rays seen through the calibrated mount), and the warp their matches make.
+  const auto pixelOf = [&](const Eigen::Vector2d& ray) -> std::optional<cv::Point2d> {
+    const auto ground = CameraModel::intersectGround(ray, camera_.T_robot_camera());
+    const auto pixel = ground ? camera_.groundToPixel(*ground) : std::nullopt;
+    if (!pixel) return std::nullopt;
+    return cv::Point2d(pixel->x(), pixel->y());
+  };
+  std::vector<cv::Point2d> current_px, previous_px;
+  std::vector<Match> kept;
+  for (const Match& m : pairs) {
+    const auto c = pixelOf(current.features.rays[static_cast<size_t>(m.query)]);
+    const auto p = pixelOf(previous.features.rays[static_cast<size_t>(m.train)]);
+    if (!c || !p) continue;
+    current_px.push_back(*c);
+    previous_px.push_back(*p);
+    kept.push_back(m);
+  }
+  if (kept.size() < 4) return std::nullopt;
+  const cv::Mat H = cv::findHomography(current_px, previous_px, 0);
+  if (H.empty()) return std::nullopt;
+  const std::vector<std::optional<cv::Point2d>> tracked =
+      trackPoints(previous_tracking_, tracking, current_px, cv::Matx33d(H), point_tracking_);
+  MountObservation o;
+  o.reference = previous.mount;
+  o.T_guess = T_previous_current;
+  o.point_sigma_m = config_.outdoor.track_sigma_px * tracking.scale * ground_sample_m_;
+  std::vector<Eigen::Vector2d> tracked_px;
+  for (size_t i = 0; i < tracked.size(); ++i) {
+    if (!tracked[i]) continue;
+    tracked_px.emplace_back(tracked[i]->x, tracked[i]->y);
+    o.current_rays.push_back(current.features.rays[static_cast<size_t>(kept[i].query)]);
+  }
+  if (tracked_px.empty()) return std::nullopt;
+  o.reference_rays = camera_.normalisedRays(tracked_px);
+  return o;
+}
+
+void Slam::estimateMountOf(const Keyframe& previous, Keyframe& current, OdometryEdge& odometry, const TrackingImage& tracking,
+                           FrameResult& result) {
   if (!previous.features.hasRays() || !current.features.hasRays()) return;
   StageTimer timer;
   // The previous frame and, when there is one, a frame farther back: the tilt shows better over a baseline.
@@ -118,8 +161,11 @@ void Slam::estimateMountOf(const Keyframe& previous, Keyframe& current, Odometry
   for (const MountReference& reference : references) {
     if (!reference.keyframe->features.hasRays()) continue;
     observed_frames.push_back(reference.keyframe->index);
-    observations.push_back(observationOf(reference.keyframe->features, reference.keyframe->mount, current.features, reference.matches,
-                                         reference.T_reference_current));
+    std::optional<MountObservation> tracked;
+    if (reference.keyframe == &previous) tracked = trackedObservation(previous, current, reference.matches, reference.T_reference_current, tracking);
+    observations.push_back(tracked ? std::move(*tracked)
+                                   : observationOf(reference.keyframe->features, reference.keyframe->mount, current.features,
+                                                   reference.matches, reference.T_reference_current));
   }
   const MountEstimate estimate = estimateMount(observations, calibrated_mount_, mountSettings());
   if (!estimate.ok) return;

@@ -1,0 +1,94 @@
+#include "groundslam/core/PointTracking.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include <opencv2/calib3d.hpp>
+#include <opencv2/imgproc.hpp>
+#include <opencv2/video/tracking.hpp>
+
+namespace groundslam {
+namespace {
+
+/// Reduced pixel i averages original pixels s*i .. s*i+s-1: original = s * reduced + (s - 1) / 2.
+cv::Matx33d reducedToOriginal(double scale) { return {scale, 0.0, (scale - 1.0) / 2.0, 0.0, scale, (scale - 1.0) / 2.0, 0.0, 0.0, 1.0}; }
+
+cv::Point2d apply(const cv::Matx33d& H, const cv::Point2d& p) {
+  const cv::Vec3d q = H * cv::Vec3d(p.x, p.y, 1.0);
+  return {q[0] / q[2], q[1] / q[2]};
+}
+
+}  // namespace
+
+TrackingImage trackingImage(const cv::Mat& gray, const PointTrackingSettings& settings, int reduced_by) {
+  TrackingImage tracking;
+  if (gray.empty()) return tracking;
+  const int factor = std::max(1, (gray.cols + settings.width_px - 1) / std::max(1, settings.width_px));
+  const cv::Size size(std::max(1, gray.cols / factor), std::max(1, gray.rows / factor));
+  cv::Mat reduced;
+  if (factor == 1) {
+    gray.convertTo(reduced, CV_32F);
+  } else {
+    cv::resize(gray(cv::Rect(0, 0, size.width * factor, size.height * factor)), reduced, size, 0.0, 0.0, cv::INTER_AREA);
+    reduced.convertTo(reduced, CV_32F);
+  }
+  cv::Mat background;
+  cv::GaussianBlur(reduced, background, cv::Size(0, 0), std::max(1.0, settings.highpass_fraction * size.width), 0.0, cv::BORDER_REFLECT);
+  cv::Mat flat = reduced - background + 128.0;
+  flat.convertTo(tracking.pixels, CV_8U);
+  tracking.scale = static_cast<double>(factor) * std::max(1, reduced_by);
+  return tracking;
+}
+
+std::vector<std::optional<cv::Point2d>> trackPoints(const TrackingImage& previous, const TrackingImage& current,
+                                                    const std::vector<cv::Point2d>& current_px, const cv::Matx33d& H_previous_current,
+                                                    const PointTrackingSettings& settings) {
+  std::vector<std::optional<cv::Point2d>> tracked(current_px.size());
+  if (previous.pixels.empty() || previous.pixels.size() != current.pixels.size() || previous.scale != current.scale ||
+      current_px.size() < static_cast<size_t>(std::max(4, settings.min_points))) {
+    return tracked;
+  }
+  const cv::Matx33d S = reducedToOriginal(current.scale);
+  const cv::Matx33d H = S.inv() * H_previous_current * S;  // reduced current pixel -> reduced previous pixel
+  // The previous image as the current one would show it under the expected warp: only the residual is tracked.
+  cv::Mat warped;
+  cv::warpPerspective(previous.pixels, warped, H, previous.pixels.size(), cv::INTER_LINEAR | cv::WARP_INVERSE_MAP, cv::BORDER_REPLICATE);
+  std::vector<cv::Point2f> from, to;
+  for (const cv::Point2d& p : current_px) {
+    const cv::Point2d r = apply(S.inv(), p);
+    from.emplace_back(static_cast<float>(r.x), static_cast<float>(r.y));
+  }
+  to = from;
+  std::vector<unsigned char> status;
+  std::vector<float> error;
+  const int window = std::max(5, settings.window_px | 1);
+  cv::calcOpticalFlowPyrLK(current.pixels, warped, from, to, status, error, cv::Size(window, window), 1,
+                           cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 30, 0.01), cv::OPTFLOW_USE_INITIAL_FLOW);
+  // Points near the border: the warped image repeats its edge there.
+  const double margin = 0.5 * window;
+  const cv::Rect2d inside(margin, margin, current.pixels.cols - 2.0 * margin, current.pixels.rows - 2.0 * margin);
+  std::vector<size_t> kept;
+  std::vector<cv::Point2f> kept_current, kept_previous;
+  for (size_t i = 0; i < from.size(); ++i) {
+    if (!status[i] || !std::isfinite(to[i].x) || !std::isfinite(to[i].y)) continue;
+    if (std::hypot(to[i].x - from[i].x, to[i].y - from[i].y) > settings.max_shift_px) continue;
+    if (!inside.contains(cv::Point2d(from[i])) || !inside.contains(cv::Point2d(to[i]))) continue;
+    const cv::Point2d previous_reduced = apply(H, cv::Point2d(to[i]));
+    kept.push_back(i);
+    kept_current.push_back(from[i]);
+    kept_previous.emplace_back(static_cast<float>(previous_reduced.x), static_cast<float>(previous_reduced.y));
+  }
+  if (kept.size() < static_cast<size_t>(std::max(4, settings.min_points))) return tracked;
+  // One plane: the pairs that a single homography explains to settings.max_error_px (seeded: OpenCV's RANSAC draws
+  // from its own fixed-seed generator, so a run repeats).
+  std::vector<unsigned char> agrees;
+  const cv::Mat fitted = cv::findHomography(kept_current, kept_previous, cv::RANSAC, settings.max_error_px, agrees, 2000, 0.999);
+  if (fitted.empty() || agrees.size() != kept.size()) return tracked;
+  if (std::count(agrees.begin(), agrees.end(), 1) < std::max(4, settings.min_points)) return tracked;
+  for (size_t k = 0; k < kept.size(); ++k) {
+    if (agrees[k]) tracked[kept[k]] = apply(S, cv::Point2d(kept_previous[k]));
+  }
+  return tracked;
+}
+
+}  // namespace groundslam
