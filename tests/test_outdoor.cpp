@@ -503,13 +503,15 @@ sim::SimulationSettings rockingSequence(bool outdoor) {
 }
 
 /// Odometry alone (no loop closure) over a simulated sequence, checked frame by frame.
-OutdoorRun runOdometry(const sim::SimulationSettings& s, double drop_probability, bool estimate_mount, bool smooth_mount = false) {
+OutdoorRun runOdometry(const sim::SimulationSettings& s, double drop_probability, bool estimate_mount, bool smooth_mount = false,
+                       bool track_points = true) {
   const sim::SequenceSimulator simulator(s);
   const std::vector<bool> dropped = sim::droppedFrames(simulator.frameCount(), drop_probability, 4, s.seed);
   Config config;
   config.camera = cameraConfigOf(s.camera, s.mounting_height_m);
   config.outdoor.estimate_mount = estimate_mount;
   config.outdoor.smooth_mount = smooth_mount;
+  config.outdoor.track_points = track_points;
   Slam slam(config, nullptr);
   OutdoorRun run;
   Trajectory truth;
@@ -590,6 +592,16 @@ TEST(OutdoorSequence, MountSolvedOverTheWholeRunHalvesTheRockingError) {
   // The motions of frames.csv, re-projected with the solved mounts: 1.29 -> 0.83 mm RMS.
   EXPECT_LT(smoothed.final_motion_error_m, 0.75 * smoothed.motion_error_m);
   EXPECT_EQ(per_frame.final_motion_error_m, per_frame.motion_error_m);  // nothing solved, nothing changed
+}
+
+TEST(OutdoorSequence, TrackedPointsCutTheTiltError) {
+  // The mount estimated from pairs whose previous side is tracked by the images rather than matched by keypoints.
+  // Measured (mount solved over the run): tilt error 0.055 against 0.135 degrees, ATE 1.05 against 1.48 mm.
+  const OutdoorRun tracked = runOdometry(rockingSequence(false), 0.0, true, true, true);
+  const OutdoorRun matched = runOdometry(rockingSequence(false), 0.0, true, true, false);
+  EXPECT_LT(tracked.tilt_error_rad, 0.6 * matched.tilt_error_rad);
+  EXPECT_LT(tracked.ate_m, 0.8 * matched.ate_m);
+  EXPECT_EQ(tracked.wrong_ok, 0);
 }
 
 TEST(OutdoorSequence, TrackedThroughArtifactsSharpTurnsAndDroppedFrames) {
