@@ -64,13 +64,27 @@ std::vector<std::optional<cv::Point2d>> trackPoints(const TrackingImage& previou
   const int window = std::max(5, settings.window_px | 1);
   cv::calcOpticalFlowPyrLK(current.pixels, warped, from, to, status, error, cv::Size(window, window), 1,
                            cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 30, 0.01), cv::OPTFLOW_USE_INITIAL_FLOW);
+  // Back again: a point must return to where it started (forward-backward error, Kalal et al. 2010).
+  std::vector<cv::Point2f> back = from;
+  std::vector<unsigned char> back_status;
+  std::vector<float> back_error;
+  cv::calcOpticalFlowPyrLK(warped, current.pixels, to, back, back_status, back_error, cv::Size(window, window), 1,
+                           cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 30, 0.01), cv::OPTFLOW_USE_INITIAL_FLOW);
+  std::vector<float> mismatches;
+  for (size_t i = 0; i < from.size(); ++i) {
+    if (status[i] && std::isfinite(error[i])) mismatches.push_back(error[i]);
+  }
+  if (mismatches.empty()) return tracked;
+  std::nth_element(mismatches.begin(), mismatches.begin() + static_cast<std::ptrdiff_t>(mismatches.size() / 2), mismatches.end());
+  const double max_mismatch = settings.max_mismatch_ratio * mismatches[mismatches.size() / 2];
   // Points near the border: the warped image repeats its edge there.
   const double margin = 0.5 * window;
   const cv::Rect2d inside(margin, margin, current.pixels.cols - 2.0 * margin, current.pixels.rows - 2.0 * margin);
   std::vector<size_t> kept;
   std::vector<cv::Point2f> kept_current, kept_previous;
   for (size_t i = 0; i < from.size(); ++i) {
-    if (!status[i] || !std::isfinite(to[i].x) || !std::isfinite(to[i].y)) continue;
+    if (!status[i] || !back_status[i] || !std::isfinite(to[i].x) || !std::isfinite(to[i].y)) continue;
+    if (std::hypot(back[i].x - from[i].x, back[i].y - from[i].y) > settings.max_round_trip_px || error[i] > max_mismatch) continue;
     if (std::hypot(to[i].x - from[i].x, to[i].y - from[i].y) > settings.max_shift_px) continue;
     if (!inside.contains(cv::Point2d(from[i])) || !inside.contains(cv::Point2d(to[i]))) continue;
     const cv::Point2d previous_reduced = apply(H, cv::Point2d(to[i]));

@@ -25,6 +25,11 @@ struct PointTrackingSettings {
   /// The tracked pairs must agree with one plane-induced warp (a homography, RANSAC) to within this (reduced pixels):
   /// what is not the ground plane (the robot's shadow edge, glare, dirt) does not.
   double max_error_px = 0.3;
+  /// Tracked back from the previous image, a point must land this close to where it started (reduced pixels): a
+  /// window that straddles something still in the image (a shadow's edge, a bumper) tracks differently each way.
+  double max_round_trip_px = 0.15;
+  /// A point whose window matches worse than this many times the median window does is left out (glare, an edge).
+  double max_mismatch_ratio = 2.0;
   int min_points = 20;  ///< fewer points tracked and agreeing: none are returned
 };
 
