@@ -1,4 +1,5 @@
 // Per-stage costs on simulated 1600x1200 frames (HD Ground's camera). Run: build/benchmarks/stage_benchmarks
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -15,6 +16,7 @@
 #include "groundslam/core/MotionPrior.hpp"
 #include "groundslam/core/MotionSearch.hpp"
 #include "groundslam/core/NearestDescriptors.hpp"
+#include "groundslam/core/PointTracking.hpp"
 #include "groundslam/core/MountEstimation.hpp"
 #include "groundslam/core/MountSmoother.hpp"
 #include "groundslam/core/StillFeatures.hpp"
@@ -348,6 +350,35 @@ void BM_HeadingRefinement(benchmark::State& state) {
   state.counters["correlation"] = correlation;
 }
 BENCHMARK(BM_HeadingRefinement)->Unit(benchmark::kMillisecond);
+
+void BM_TrackingImage(benchmark::State& state) {
+  // Paid by every frame while the mount is estimated (outdoor.track_points): the HD image reduced to 320 wide, its
+  // background light removed.
+  const PointTrackingSettings settings;
+  for (auto _ : state) benchmark::DoNotOptimize(trackingImage(frames().first, settings));
+}
+BENCHMARK(BM_TrackingImage)->Unit(benchmark::kMillisecond);
+
+void BM_PointTracking(benchmark::State& state) {
+  // Paid by every frame whose mount is estimated from tracked points: 300 points (the mount estimate's pairs) tracked
+  // from the simulator's true motion moved by 2 pixels: the warp, Lucas-Kanade both ways, the plane's RANSAC.
+  const PointTrackingSettings settings;
+  const TrackingImage a = trackingImage(frames().first, settings), b = trackingImage(frames().second, settings);
+  const cv::Matx23d W = trueWarpTwoPixelsOff();
+  const cv::Matx33d start(W(0, 0), W(0, 1), W(0, 2), W(1, 0), W(1, 1), W(1, 2), 0.0, 0.0, 1.0);
+  std::vector<cv::Point2d> points;
+  for (int row = 0; row < 15; ++row) {
+    for (int col = 0; col < 20; ++col) points.emplace_back(200.0 + 60.0 * col, 180.0 + 60.0 * row);
+  }
+  size_t tracked = 0;
+  for (auto _ : state) {
+    const auto result = trackPoints(a, b, points, start, settings);
+    tracked = static_cast<size_t>(std::count_if(result.begin(), result.end(), [](const auto& p) { return p.has_value(); }));
+    benchmark::DoNotOptimize(result);
+  }
+  state.counters["tracked"] = static_cast<double>(tracked);
+}
+BENCHMARK(BM_PointTracking)->Unit(benchmark::kMillisecond);
 
 void BM_MountEstimation(benchmark::State& state) {
   // One reference (the previous frame), the default 300 pairs; the pipeline uses up to three.

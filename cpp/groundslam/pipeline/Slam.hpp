@@ -159,6 +159,8 @@ class Slam {
   /// The pixel warp (current image to previous) a ground motion T_prev_curr makes, and the ground motion of a warp;
   /// both through the calibrated camera, over a grid of the image's pixels.
   cv::Matx23d imageWarpOf(const Pose2& T_prev_curr) const;
+  /// The same through each frame's own mount: the pixel warp the ground motion T_prev_curr makes between the two frames.
+  cv::Matx23d imageWarpOf(const Pose2& T_prev_curr, const MountState& previous_mount, const MountState& current_mount) const;
   Pose2 groundMotionOf(const cv::Matx23d& W_previous_current) const;
   /// The same with each frame's pixels projected with its own mount (tilt and height).
   Pose2 groundMotionOf(const cv::Matx23d& W_previous_current, const MountState& previous_mount, const MountState& current_mount) const;

@@ -42,6 +42,22 @@ cv::Matx23d Slam::imageWarpOf(const Pose2& T_prev_curr) const {
   return warpFromPose(leastSquaresRigid(previous_pixels, current_pixels));
 }
 
+cv::Matx23d Slam::imageWarpOf(const Pose2& T_prev_curr, const MountState& previous_mount, const MountState& current_mount) const {
+  const CameraModel previous_camera(camera_.intrinsics(), mountFor(calibrated_mount_, previous_mount));
+  const Eigen::Isometry3d current_camera = mountFor(calibrated_mount_, current_mount);
+  std::vector<Eigen::Vector2d> grid = imageGrid(camera_.intrinsics()), current_pixels, previous_pixels;
+  const std::vector<Eigen::Vector2d> rays = camera_.normalisedRays(grid);
+  for (size_t i = 0; i < grid.size(); ++i) {
+    const auto ground = CameraModel::intersectGround(rays[i], current_camera);
+    if (!ground) continue;
+    const auto seen_before = previous_camera.groundToPixel(T_prev_curr * *ground);
+    if (!seen_before) continue;
+    current_pixels.push_back(grid[i]);
+    previous_pixels.push_back(*seen_before);
+  }
+  return warpFromPose(leastSquaresRigid(previous_pixels, current_pixels));
+}
+
 Pose2 Slam::groundMotionOf(const cv::Matx23d& W_previous_current) const {
   const MountState calibrated = calibratedState(calibrated_mount_);
   return groundMotionOf(W_previous_current, calibrated, calibrated);
