@@ -122,7 +122,7 @@ TEST(PointTracking, WhatStaysStillInTheImageIsLeftOut) {
   ASSERT_GT(on_edge, 10);
   EXPECT_EQ(on_edge_tracked, 0);
   EXPECT_GE(floor_tracked, 0.75 * floor);
-  EXPECT_LT(worst, 0.4);  // measured: 0.29 px; 286 of 307 floor points tracked, none of the 14 on the edge
+  EXPECT_LT(worst, 0.4);  // measured: 0.25 px; 242 of 307 floor points tracked, none of the 14 on the edge
 }
 
 TEST(PointTracking, TooFewPointsGiveNone) {

@@ -120,7 +120,11 @@ std::optional<MountObservation> Slam::trackedObservation(const Keyframe& previou
   };
   std::vector<cv::Point2d> current_px, previous_px;
   std::vector<Match> kept;
-  for (const Match& m : pairs) {
+  // No more points than the estimate takes (outdoor.max_pairs), spread over the pairs as it would spread them.
+  const size_t step = (pairs.size() + static_cast<size_t>(std::max(1, config_.outdoor.max_pairs)) - 1) /
+                      static_cast<size_t>(std::max(1, config_.outdoor.max_pairs));
+  for (size_t i = 0; i < pairs.size(); i += std::max<size_t>(1, step)) {
+    const Match& m = pairs[i];
     const auto c = pixelOf(current.features.rays[static_cast<size_t>(m.query)]);
     const auto p = pixelOf(previous.features.rays[static_cast<size_t>(m.train)]);
     if (!c || !p) continue;
