@@ -3,10 +3,10 @@
 // pixels on every pyramid level of the simulated floors), so a pair of matched keypoints says where one ground point
 // is in both images only to that. The camera's tilt shows in the images as a perspective distortion of about a pixel
 // at the corners per degree at 320 x 240, which such pairs barely resolve (one frame's tilt change 0.25-0.7 degrees
-// off). Tracking each keypoint of the current image into the previous one by the images themselves (pyramidal
-// Lucas-Kanade, Bouguet 2000) finds the same ground point to a few hundredths of a pixel, once the previous image is
-// warped so that only the tilt's small distortion is left to find (a turn between frames biases a tracker that
-// models a shift alone).
+// off). Tracking each keypoint of the current image into the previous one by the images themselves (Lucas-Kanade;
+// OpenCV's implementation after Bouguet 2000, on one level) finds the same ground point to a few hundredths of a
+// pixel, once the previous image is warped so that only the tilt's small distortion is left to find (a turn between
+// frames biases a tracker that models a shift alone).
 
 #include <optional>
 #include <vector>
