@@ -9,11 +9,10 @@
 #include <opencv2/imgproc.hpp>
 #include <opencv2/video/tracking.hpp>
 
+#include "groundslam/core/ImageReduction.hpp"
+
 namespace groundslam {
 namespace {
-
-/// Reduced pixel i averages original pixels s*i .. s*i+s-1: original = s * reduced + (s - 1) / 2.
-cv::Matx33d reducedToOriginal(double scale) { return {scale, 0.0, (scale - 1.0) / 2.0, 0.0, scale, (scale - 1.0) / 2.0, 0.0, 0.0, 1.0}; }
 
 cv::Matx33d homogeneous(const cv::Matx23d& W) { return {W(0, 0), W(0, 1), W(0, 2), W(1, 0), W(1, 1), W(1, 2), 0.0, 0.0, 1.0}; }
 
@@ -76,16 +75,12 @@ cv::Matx23d toOriginalPixels(const cv::Matx23d& W_reduced, double scale) {
 
 AlignmentImage alignmentImage(const cv::Mat& gray, const ImageAlignmentSettings& settings, int reduced_by) {
   AlignmentImage aligned;
-  const int factor = std::max(1, (gray.cols + settings.width_px - 1) / std::max(1, settings.width_px));
-  // Whole blocks only, as for feature extraction: reduced pixel i averages exactly original pixels f*i .. f*i+f-1.
-  const cv::Size size(std::max(1, gray.cols / factor), std::max(1, gray.rows / factor));
-  cv::Mat reduced;
-  cv::resize(gray(cv::Rect(0, 0, size.width * factor, size.height * factor)), reduced, size, 0.0, 0.0, cv::INTER_AREA);
-  reduced.convertTo(reduced, CV_32F);
+  const ReducedImage reduced = reduceByWholeFactor(gray, settings.width_px);
   cv::Mat background;
-  cv::GaussianBlur(reduced, background, cv::Size(0, 0), std::max(1.0, settings.highpass_fraction * size.width), 0.0, cv::BORDER_REFLECT);
-  aligned.pixels = reduced - background;
-  aligned.scale = static_cast<double>(factor) * std::max(1, reduced_by);
+  cv::GaussianBlur(reduced.pixels, background, cv::Size(0, 0), std::max(1.0, settings.highpass_fraction * reduced.pixels.cols), 0.0,
+                   cv::BORDER_REFLECT);
+  aligned.pixels = reduced.pixels - background;
+  aligned.scale = static_cast<double>(reduced.factor) * std::max(1, reduced_by);
   return aligned;
 }
 

@@ -7,11 +7,10 @@
 #include <opencv2/imgproc.hpp>
 #include <opencv2/video/tracking.hpp>
 
+#include "groundslam/core/ImageReduction.hpp"
+
 namespace groundslam {
 namespace {
-
-/// Reduced pixel i averages original pixels s*i .. s*i+s-1: original = s * reduced + (s - 1) / 2.
-cv::Matx33d reducedToOriginal(double scale) { return {scale, 0.0, (scale - 1.0) / 2.0, 0.0, scale, (scale - 1.0) / 2.0, 0.0, 0.0, 1.0}; }
 
 cv::Point2d apply(const cv::Matx33d& H, const cv::Point2d& p) {
   const cv::Vec3d q = H * cv::Vec3d(p.x, p.y, 1.0);
@@ -23,15 +22,9 @@ cv::Point2d apply(const cv::Matx33d& H, const cv::Point2d& p) {
 TrackingImage trackingImage(const cv::Mat& gray, const PointTrackingSettings& settings, int reduced_by) {
   TrackingImage tracking;
   if (gray.empty()) return tracking;
-  const int factor = std::max(1, (gray.cols + settings.width_px - 1) / std::max(1, settings.width_px));
-  const cv::Size size(std::max(1, gray.cols / factor), std::max(1, gray.rows / factor));
-  cv::Mat reduced;
-  if (factor == 1) {
-    gray.convertTo(reduced, CV_32F);
-  } else {
-    cv::resize(gray(cv::Rect(0, 0, size.width * factor, size.height * factor)), reduced, size, 0.0, 0.0, cv::INTER_AREA);
-    reduced.convertTo(reduced, CV_32F);
-  }
+  const ReducedImage reduced_image = reduceByWholeFactor(gray, settings.width_px);
+  const cv::Mat& reduced = reduced_image.pixels;
+  const cv::Size size = reduced.size();
   // The background light is smooth: blurred on an image reduced four times more, then brought back (a blur of 26
   // pixels on the 320-wide image itself cost 2.7 ms a frame).
   constexpr int kCoarse = 4;
@@ -43,7 +36,7 @@ TrackingImage trackingImage(const cv::Mat& gray, const PointTrackingSettings& se
   cv::resize(coarse, background, size, 0.0, 0.0, cv::INTER_LINEAR);
   cv::Mat flat = reduced - background + 128.0;
   flat.convertTo(tracking.pixels, CV_8U);
-  tracking.scale = static_cast<double>(factor) * std::max(1, reduced_by);
+  tracking.scale = static_cast<double>(reduced_image.factor) * std::max(1, reduced_by);
   return tracking;
 }
 
