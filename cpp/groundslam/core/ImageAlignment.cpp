@@ -106,11 +106,15 @@ std::pair<cv::Mat, cv::Mat> localCorrelation(const cv::Mat& a, const cv::Mat& b)
 }  // namespace
 
 cv::Mat movingPixels(const cv::Mat& previous, const cv::Mat& current, const cv::Matx23d& W_expected, double still_correlation) {
+  cv::Mat moved_previous;
+  cv::warpAffine(previous, moved_previous, W_expected, previous.size(), cv::INTER_LINEAR | cv::WARP_INVERSE_MAP, cv::BORDER_REFLECT);
+  return movingPixels(previous, moved_previous, current, still_correlation);
+}
+
+cv::Mat movingPixels(const cv::Mat& previous, const cv::Mat& moved_previous, const cv::Mat& current, double still_correlation) {
   // Still: alike in place, and more alike in place than where the expected motion puts the ground (a smooth
   // floor's gradients look alike after any small shift; a shadow's edge only in place).
   const auto [in_place, textured] = localCorrelation(previous, current);
-  cv::Mat moved_previous;
-  cv::warpAffine(previous, moved_previous, W_expected, previous.size(), cv::INTER_LINEAR | cv::WARP_INVERSE_MAP, cv::BORDER_REFLECT);
   const cv::Mat moved = localCorrelation(moved_previous, current).first;
   cv::Mat still = (in_place > still_correlation) & (in_place > moved) & textured;
   cv::dilate(still, still, cv::Mat::ones(5, 5, CV_8U));

@@ -51,6 +51,9 @@ struct ImageAlignment {
 /// in both images (settings.still_correlation) and more alike there than where the expected warp (current pixel to
 /// previous, pixels of these images) puts it: it moved with the camera.
 cv::Mat movingPixels(const cv::Mat& previous, const cv::Mat& current, const cv::Matx23d& W_expected, double still_correlation);
+/// The same test with the previous image already moved as the expected motion moves it (`moved_previous`: any warp,
+/// a homography too); all three images CV_32F of one size.
+cv::Mat movingPixels(const cv::Mat& previous, const cv::Mat& moved_previous, const cv::Mat& current, double still_correlation);
 
 /// The rigid warp of `current` onto `previous` (both alignmentImage()s of one size) from each start (original
 /// pixels, current to previous); the one of highest correlation, probed from settings.probe_px around it. The

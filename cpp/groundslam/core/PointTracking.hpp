@@ -19,6 +19,9 @@ struct PointTrackingSettings {
   int width_px = 320;               ///< images are reduced by a whole factor to this width or less before tracking
   double highpass_fraction = 0.08;  ///< background light removed: a Gaussian blur this share of the reduced width
   int window_px = 15;               ///< the tracker's window (reduced pixels)
+  /// Each pixel's contrast normalised over the tracker's window (see trackingImage); false: the background light
+  /// removed only.
+  bool normalise_contrast = true;
   /// A tracked point may move this far (reduced pixels) from where the expected warp put it: the tilt's distortion
   /// is a pixel or two, a larger move is a tracker that slid off.
   double max_shift_px = 2.0;
@@ -31,9 +34,14 @@ struct PointTrackingSettings {
   /// A point whose window matches worse than this many times the median window does is left out (glare, an edge).
   double max_mismatch_ratio = 2.0;
   int min_points = 20;  ///< fewer points tracked and agreeing: none are returned
+  /// A point whose window overlaps what stays still in the image (a neighbourhood that correlates at least this well
+  /// with itself at the same place in the other image, as in ImageAlignment's movingPixels: the robot's shadow edge,
+  /// lens dirt, a bumper), in the current image or where the warp brings the previous image's, is left out; 0: none.
+  double still_correlation = 0.8;
 };
 
-/// An image as the tracker uses it: reduced, its background light removed, 8-bit around grey 128.
+/// An image as the tracker uses it: reduced, its background light removed, its contrast normalised over the tracker's
+/// window, 8-bit around grey 128.
 struct TrackingImage {
   cv::Mat pixels;
   double scale = 1.0;  ///< original image pixels per pixel of `pixels` (the decoder's and our reduction)

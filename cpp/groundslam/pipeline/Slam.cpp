@@ -83,13 +83,10 @@ FrameResult Slam::process(PreparedFrame prepared) {
     // Only where something already stayed still (a still match, an artifact cell): a clean floor pays nothing.
     const bool artifacts_seen = result.still_matches > 0 || artifact_mask_.artifactCells() > 0;
     if (!odometry.fallback && artifacts_seen) still = stillFeatures(*previous_, current, odometry.T_prev_curr);
-    // Tracked points only where nothing has stayed still in the image for a while: the robot's shadow edge, glare or dirt bias a
-    // tracker as they bias the images' alignment (measured outdoors: weak floors' mounts misled, 9-41 wrong `ok`
-    // motions per sequence where there had been 0-1).
-    frames_without_artifacts_ = artifacts_seen ? 0 : frames_without_artifacts_ + 1;
-    const bool track = frames_without_artifacts_ > kTrackAfterCleanFrames;
+    // Points are tracked through the robot's shadow, glare and dirt too: the tracker compares each window's texture,
+    // not its light, and leaves out windows near what stays still (core/PointTracking.hpp).
     if (!odometry.fallback && !odometry.aligned && config_.outdoor.estimate_mount) {
-      estimateMountOf(*previous_, current, odometry, track ? prepared.tracking : TrackingImage{}, result);
+      estimateMountOf(*previous_, current, odometry, prepared.tracking, result);
     }
     // Not where something stays still in the image: the robot's shadow, glare, dirt or bumper pull the images'
     // alignment toward rest (measured outdoors: 1-5% of the turns lost where the keypoints are too weak to tell).

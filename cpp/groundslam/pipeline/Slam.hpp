@@ -305,8 +305,6 @@ class Slam {
   std::optional<Keyframe> previous_;
   AlignmentImage previous_alignment_;  ///< the previous image as the alignment uses it (odometry.align_images)
   TrackingImage previous_tracking_;    ///< the previous image as the point tracker uses it (outdoor.track_points)
-  int frames_without_artifacts_ = 0;   ///< consecutive frames without a still match or an artifact cell
-  static constexpr int kTrackAfterCleanFrames = 10;  ///< points are tracked only after this many such frames
   AlignmentImage tracked_alignment_;   ///< the last tracked frame's image, keyframe, graph index and time (bridgeLoss)
   std::optional<Keyframe> tracked_keyframe_;  ///< its features as projected with its mount (bridgeByFeatures)
   int tracked_frame_ = -1;
