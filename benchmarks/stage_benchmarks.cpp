@@ -353,7 +353,7 @@ BENCHMARK(BM_HeadingRefinement)->Unit(benchmark::kMillisecond);
 
 void BM_TrackingImage(benchmark::State& state) {
   // Paid by every frame while the mount is estimated (outdoor.track_points): the HD image reduced to 320 wide, its
-  // background light removed.
+  // background light removed, its contrast normalised over the tracker's window.
   const PointTrackingSettings settings;
   for (auto _ : state) benchmark::DoNotOptimize(trackingImage(frames().first, settings));
 }
@@ -361,7 +361,8 @@ BENCHMARK(BM_TrackingImage)->Unit(benchmark::kMillisecond);
 
 void BM_PointTracking(benchmark::State& state) {
   // Paid by every frame whose mount is estimated from tracked points: 300 points (the mount estimate's pairs) tracked
-  // from the simulator's true motion moved by 2 pixels: the warp, Lucas-Kanade both ways, the plane's RANSAC.
+  // from the simulator's true motion moved by 2 pixels: the warp, the still parts, Lucas-Kanade both ways, the plane's
+  // RANSAC.
   const PointTrackingSettings settings;
   const TrackingImage a = trackingImage(frames().first, settings), b = trackingImage(frames().second, settings);
   const cv::Matx23d W = trueWarpTwoPixelsOff();
