@@ -176,7 +176,6 @@ FrameResult Slam::process(PreparedFrame prepared) {
     recent_.push_back(current);
     while (recent_.size() > 30) recent_.pop_front();
   }
-  previous_mount_estimated_ = result.mount_estimated;
   previous_ = std::move(current);
   if (!lost_ && measured_.back()) {
     tracked_keyframe_ = previous_;

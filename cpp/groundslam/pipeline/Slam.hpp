@@ -305,7 +305,6 @@ class Slam {
   std::optional<Keyframe> previous_;
   AlignmentImage previous_alignment_;  ///< the previous image as the alignment uses it (odometry.align_images)
   TrackingImage previous_tracking_;    ///< the previous image as the point tracker uses it (outdoor.track_points)
-  bool previous_mount_estimated_ = false;  ///< the previous frame's own mount estimate was used (FrameResult)
   AlignmentImage tracked_alignment_;   ///< the last tracked frame's image, keyframe, graph index and time (bridgeLoss)
   std::optional<Keyframe> tracked_keyframe_;  ///< its features as projected with its mount (bridgeByFeatures)
   int tracked_frame_ = -1;

@@ -166,11 +166,7 @@ void Slam::estimateMountOf(const Keyframe& previous, Keyframe& current, Odometry
     if (!reference.keyframe->features.hasRays()) continue;
     observed_frames.push_back(reference.keyframe->index);
     std::optional<MountObservation> tracked;
-    // Tracked pairs tie this frame's tilt to the previous frame's to a few hundredths of a degree: only where that
-    // frame's own was estimated, not after a loss (its mount the calibrated one, up to a degree off on a rocking mount).
-    if (reference.keyframe == &previous && previous_mount_estimated_) {
-      tracked = trackedObservation(previous, current, reference.matches, reference.T_reference_current, tracking);
-    }
+    if (reference.keyframe == &previous) tracked = trackedObservation(previous, current, reference.matches, reference.T_reference_current, tracking);
     observations.push_back(tracked ? std::move(*tracked)
                                    : observationOf(reference.keyframe->features, reference.keyframe->mount, current.features,
                                                    reference.matches, reference.T_reference_current));
