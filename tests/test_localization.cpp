@@ -298,6 +298,79 @@ TEST(Relocalization, AMotionRefusedForItsSpeedIsBridgedToTheLastTrackedFrame) {
   for (size_t k = 122; k < shown.size(); ++k) EXPECT_EQ(unbridged[k].status, FrameStatus::lost) << k;
 }
 
+TEST(Relocalization, ALossInsideALostSegmentIsBridgedToThatSegmentNotLeftAdrift) {
+  // Carried 80 cm away (frames 250-329 never seen) with global localization kept out (a weak floor where it finds
+  // nothing): from frame 330 the robot is lost, its segment measured by odometry. Then a blank frame (340) and two
+  // frames dropped (341, 342): frame 343 cannot be measured against the blank one, and is measured against frame
+  // 339 of the lost segment instead, which the new segment then continues. Without the bridge (bridge_max_frames 0)
+  // the motion 339 -> 343 is a guess, one usual step a frame shown: two steps short.
+  auto settings = session("asphalt", sim::PathKind::loop, 400, 3);
+  settings.ground_seed.reset();
+  const sim::SequenceSimulator simulator(settings);
+  std::vector<int> shown;
+  for (int i = 0; i < 360; ++i) {
+    if (i < 250 || (i >= 330 && i != 341 && i != 342)) shown.push_back(i);
+  }
+  const auto run = [&](int bridge_max_frames, std::vector<FrameResult>& results) {
+    Config config = configFor(settings);
+    config.localization.min_votes = 1e8;
+    config.odometry_checks.bridge_max_frames = bridge_max_frames;
+    Slam slam(config, shippedVocabulary());
+    for (const int i : shown) {
+      const cv::Mat image = i == 340 ? cv::Mat(simulator.renderFrame(i).size(), CV_8U, cv::Scalar(128)) : simulator.renderFrame(i);
+      results.push_back(slam.process(image, static_cast<double>(i)));
+    }
+    slam.finish();
+    return slam.trajectory();
+  };
+  std::vector<FrameResult> bridged, unbridged;
+  const Trajectory estimated = run(3, bridged);
+  const Trajectory guessed = run(0, unbridged);
+  const size_t at339 = 259, at343 = 261;  // positions in `shown`
+  ASSERT_EQ(shown[at339], 339);
+  ASSERT_EQ(shown[at343], 343);
+  // Lost all along: the segment continued is not the map.
+  for (size_t k = 250; k < shown.size(); ++k) EXPECT_EQ(bridged[k].status, FrameStatus::lost) << shown[k];
+  const Pose2 true_motion = between(simulator.groundTruth()[339], simulator.groundTruth()[343]);
+  const Pose2 joined = between(estimated[at339].T_world_robot, estimated[at343].T_world_robot);
+  EXPECT_LT((joined.translation() - true_motion.translation()).norm(), 0.0005);
+  EXPECT_LT(std::abs(wrapAngle(joined.theta - true_motion.theta)), 0.05 * M_PI / 180.0);
+  const Pose2 guess = between(guessed[at339].T_world_robot, guessed[at343].T_world_robot);
+  EXPECT_GT((guess.translation() - true_motion.translation()).norm(), 0.015);
+}
+
+TEST(Relocalization, ASegmentLostAgainBeforeItWasFoundJoinsWithTheNextOne) {
+  // A loop driven twice. Carried 30 cm ahead onto ground not yet mapped (frames 100-129 never seen), the robot is
+  // lost from frame 130; a blank frame at 140 loses it again (no bridge: bridge_max_frames 0). The second segment
+  // is relocalized when the robot comes back onto the first lap's ground (frame 200 on); the first, frames
+  // 130-139, is found then on the second segment's ground and joins too, instead of staying where its guess put it
+  // (one step past frame 99: 29 cm short).
+  auto settings = session("asphalt", sim::PathKind::loop, 400, 3);
+  settings.ground_seed.reset();
+  const sim::SequenceSimulator simulator(settings);
+  Config config = configFor(settings);
+  config.odometry_checks.bridge_max_frames = 0;
+  Slam slam(config, shippedVocabulary());
+  Trajectory truth;
+  std::vector<FrameStatus> status;
+  for (int i = 0; i < 240; ++i) {
+    if (i >= 100 && i < 130) continue;
+    const cv::Mat image = i == 140 ? cv::Mat(simulator.renderFrame(i).size(), CV_8U, cv::Scalar(128)) : simulator.renderFrame(i);
+    status.push_back(slam.process(image, static_cast<double>(i)).status);
+    if (i != 140) truth.push_back({static_cast<double>(i), simulator.groundTruth()[static_cast<size_t>(i)]});
+  }
+  slam.finish();
+  EXPECT_EQ(status[100], FrameStatus::lost);  // frame 130
+  const Trajectory estimated = slam.trajectory();
+  const TrajectoryMetrics m = evaluateTrajectory(truth, estimated).metrics;  // paired by time: not the blank frame
+  EXPECT_EQ(m.measured_frames, m.groundtruth_frames);  // frames 130-139 too
+  EXPECT_LT(m.ate_rmse_m, 0.005);
+  // Frames 130 -> 139 against frame 99: placed, not guessed.
+  const Pose2 placed = between(estimated[99].T_world_robot, estimated[109].T_world_robot);
+  const Pose2 true_motion = between(simulator.groundTruth()[99], simulator.groundTruth()[139]);
+  EXPECT_LT((placed.translation() - true_motion.translation()).norm(), 0.005);
+}
+
 TEST(Relocalization, AQuarterTurnLostOnCarpetUnderTheOutdoorLookIsFoundBySearchingTheTurns) {
   // Carpet with the outdoor look (a shadow turning with the heading, lens dirt, glare, a bumper, a rocking mount,
   // motion blur); frame 3 dropped. Frame 39 turns 91.8 degrees on the spot: brute-force matching keeps 12 pairs

@@ -1,5 +1,6 @@
 #include "groundslam/localization/FeatureMap.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 
@@ -32,7 +33,7 @@ int FeatureMap::addAnchor(int frame, const Pose2& T_map_anchor, int segment, con
   for (size_t i = 0; i < features.size(); ++i) {
     const std::uint8_t* descriptor = features.descriptors.ptr<std::uint8_t>(static_cast<int>(i));
     const Eigen::Vector2d position = R * features.points[i] + T_map_anchor.translation();
-    if (alreadyMapped(position, descriptor)) continue;
+    if (alreadyMapped(position, descriptor, segment)) continue;
     MapFeature f;
     std::memcpy(f.descriptor.data(), descriptor, f.descriptor.size());
     f.point = features.points[i].cast<float>();
@@ -60,7 +61,7 @@ void FeatureMap::index(std::uint32_t feature_index, const Eigen::Vector2d& posit
       .push_back(feature_index);
 }
 
-bool FeatureMap::alreadyMapped(const Eigen::Vector2d& position, const std::uint8_t* descriptor) const {
+bool FeatureMap::alreadyMapped(const Eigen::Vector2d& position, const std::uint8_t* descriptor, int segment) const {
   if (settings_.dedup_m <= 0.0) return false;
   const double cell = kDedupCellM;
   const auto cx = static_cast<std::int64_t>(std::floor(position.x() / cell));
@@ -73,6 +74,8 @@ bool FeatureMap::alreadyMapped(const Eigen::Vector2d& position, const std::uint8
         // The descriptor first: a few nanoseconds, and it rules out almost every neighbour before the position's
         // sine and cosine are needed.
         if (hammingDistance256(descriptor, features_[i].descriptor.data()) > settings_.dedup_hamming) continue;
+        // Another segment's positions are relative to another guess: the same place on the ground is elsewhere.
+        if (anchors_[features_[i].anchor].segment != segment) continue;
         if ((positionOf(features_[i]) - position).squaredNorm() <= settings_.dedup_m * settings_.dedup_m) return true;
       }
     }
@@ -111,6 +114,20 @@ size_t FeatureMap::bytes() const {
   for (const auto& [cell, members] : dedup_grid_) grid += members.capacity() * sizeof(std::uint32_t) + 48;  // + node
   // Per feature: itself, its posting, its entry in its anchor's list and in the dedup grid.
   return features_.size() * (sizeof(MapFeature) + 2 * sizeof(std::uint32_t)) + anchors_.size() * sizeof(MapAnchor) + grid;
+}
+
+GroundFeatures FeatureMap::featuresInAnchorFrame(int anchor) const {
+  const std::vector<std::uint32_t>& indices = featuresOf(anchor);
+  GroundFeatures features;
+  features.descriptors.create(static_cast<int>(indices.size()), 32, CV_8U);
+  for (size_t i = 0; i < indices.size(); ++i) {
+    const MapFeature& f = features_[indices[i]];
+    features.points.push_back(f.point.cast<double>());
+    features.angles_rad.push_back(f.angle_rad);
+    features.octaves.push_back(f.octave);
+    std::copy(f.descriptor.begin(), f.descriptor.end(), features.descriptors.ptr<std::uint8_t>(static_cast<int>(i)));
+  }
+  return features;
 }
 
 }  // namespace groundslam

@@ -64,6 +64,9 @@ class FeatureMap {
   Eigen::Vector2d positionOf(const MapFeature& f) const;
   double angleOf(const MapFeature& f) const;
   const std::vector<std::uint32_t>& featuresOf(int anchor) const { return features_of_anchor_[static_cast<size_t>(anchor)]; }
+  /// The features an anchor holds, in its robot frame, as a query for localization (those the map already had
+  /// when it was added are not among them).
+  GroundFeatures featuresInAnchorFrame(int anchor) const;
   /// Anchors whose position lies within `radius_m` of `where`.
   std::vector<int> anchorsNear(const Eigen::Vector2d& where, double radius_m) const;
   /// Bytes the map holds (features, postings, keyframe lists, dedup grid, keyframes), for the memory budget.
@@ -71,7 +74,8 @@ class FeatureMap {
 
  private:
   using CellKey = std::uint64_t;
-  bool alreadyMapped(const Eigen::Vector2d& position, const std::uint8_t* descriptor) const;
+  /// A feature of the segment's anchors lies this close with a close descriptor.
+  bool alreadyMapped(const Eigen::Vector2d& position, const std::uint8_t* descriptor, int segment) const;
   void index(std::uint32_t feature_index, const Eigen::Vector2d& position);
 
   std::shared_ptr<const Vocabulary> vocabulary_;

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <map>
 
 #include <Eigen/Eigenvalues>
 
@@ -39,6 +40,7 @@ const char* loopGateName(LoopGate gate) {
     case LoopGate::matches: return "matches";
     case LoopGate::covariance: return "covariance";
     case LoopGate::ambiguous: return "ambiguous";
+    case LoopGate::outside_prior: return "outside_prior";
   }
   return "unknown";
 }
@@ -132,13 +134,23 @@ void LoopCloser::admitPlaces(int last, const std::vector<Pose2>& estimates) {
   while (!pending_.empty() && pending_.front().frame <= last) {
     Pending& entering = pending_.front();
     const Eigen::Vector2d position = estimates[static_cast<size_t>(entering.frame)].translation();
-    if (!places_.covers(position, settings_.place_spacing_m)) {
+    if (!coveredInItsSegment(entering.frame, position)) {
       places_.add(entering.frame, position, entering.features, std::move(entering.bow));
       feature_map_.addAnchor(entering.frame, estimates[static_cast<size_t>(entering.frame)], segmentOf(entering.frame),
                              entering.features);
     }
     pending_.pop_front();
   }
+}
+
+bool LoopCloser::coveredInItsSegment(int frame, const Eigen::Vector2d& position) const {
+  const int segment = segmentOf(frame);
+  if (segment == kMapSegment) return places_.covers(position, settings_.place_spacing_m);
+  // A lost segment's positions are relative to a guess: only its own places may cover them.
+  for (const Place* place : places_.near(position, settings_.place_spacing_m)) {
+    if (segmentOf(place->frame) == segment && (place->position - position).norm() < settings_.place_spacing_m) return true;
+  }
+  return false;
 }
 
 std::vector<BowMatch> LoopCloser::selectCandidates(int frame, const BowVector& bow, const std::vector<Pose2>& estimates) const {
@@ -230,6 +242,11 @@ LoopCandidate LoopCloser::verify(int frame_a, const GroundFeatures& a, int frame
   } else if (candidate.ambiguity > settings_.max_ambiguity) {
     // Not in the paper: on a repetitive floor a transform shifted by one tile fits almost as well.
     candidate.rejected_by = LoopGate::ambiguous;
+  } else if (!withinPrior(fit.T_target_source, prior)) {
+    // Not in the paper: RANSAC drew its hypotheses inside the window the map can believe; a fit its inliers pulled
+    // out of it rests on the wrong inliers (measured outdoors: a carpet loop fit 2.4 degrees past a 2-degree
+    // window, 2.8 degrees off the truth, through every other gate).
+    candidate.rejected_by = LoopGate::outside_prior;
   }
   return candidate;
 }
@@ -300,28 +317,73 @@ std::vector<LoopCandidate> LoopCloser::relocalize(int frame, const GroundFeature
   const Localization localization = localizeGlobally(feature_map_, features, localization_, fitting_, usable);
   if (!localization.ok() || onAnAnchorsPose(localization)) return {};
   // One localization could be a lookalike; the next must agree with what odometry measured in between.
-  if (!pending_localization_ || segmentOf(pending_localization_->frame) != lost_segment) {
-    pending_localization_ = PendingLocalization{frame, localization};
+  const PendingLocalization current{frame, localization};
+  if (!pending_localization_ || segmentOf(pending_localization_->frame) != lost_segment ||
+      !agreeWithOdometry(*pending_localization_, current, estimates)) {
+    pending_localization_ = current;
     return {};
   }
   const PendingLocalization earlier = *pending_localization_;
-  const Pose2 by_localization = between(earlier.localization.T_map_robot, localization.T_map_robot);
-  const Pose2 by_odometry = between(estimates[static_cast<size_t>(earlier.frame)], estimates[static_cast<size_t>(frame)]);
-  const Pose2 disagreement = by_odometry.inverse() * by_localization;
-  if (disagreement.translation().norm() > localization_.max_odometry_disagreement_m ||
-      std::abs(disagreement.theta) > localization_.max_odometry_disagreement_rad) {
-    pending_localization_ = PendingLocalization{frame, localization};
-    return {};
-  }
   pending_localization_.reset();
-  for (int& segment : segment_of_frame_) {
-    if (segment == lost_segment) segment = kMapSegment;
-  }
-  feature_map_.mergeSegment(lost_segment, kMapSegment);
+  joinSegments(lost_segment, kMapSegment);
   std::vector<LoopCandidate> joined = {candidateFrom(earlier.localization, earlier.frame), candidateFrom(localization, frame)};
   recent_loops_.emplace_back(joined.back().frame_a, frame);
   if (recent_loops_.size() > kRecentLoops) recent_loops_.pop_front();
   return joined;
+}
+
+std::vector<LoopCandidate> LoopCloser::joinOrphanSegments(const std::vector<Pose2>& estimates) {
+  // Localizing costs a few milliseconds a keyframe: a segment tries at most this many, spread over its frames.
+  constexpr size_t kMaxAnchorsTried = 8;
+  const std::vector<MapAnchor>& anchors = feature_map_.anchors();
+  std::map<int, std::vector<int>> anchors_of_segment;
+  for (size_t a = 0; a < anchors.size(); ++a) {
+    if (anchors[a].segment > kMapSegment) anchors_of_segment[anchors[a].segment].push_back(static_cast<int>(a));
+  }
+  std::vector<LoopCandidate> joined;
+  for (const auto& [segment, members] : anchors_of_segment) {
+    if (members.size() < 2) continue;  // one localization cannot be confirmed
+    AnchorFilter usable(anchors.size());
+    for (size_t a = 0; a < usable.size(); ++a) usable[a] = anchors[a].segment == kMapSegment;
+    std::vector<PendingLocalization> found;
+    const size_t tried = std::min(kMaxAnchorsTried, members.size());
+    for (size_t k = 0; k < tried; ++k) {
+      const int anchor = members[k * (members.size() - 1) / (tried - 1)];
+      const int frame = anchors[static_cast<size_t>(anchor)].frame;
+      const Localization localization =
+          localizeGlobally(feature_map_, feature_map_.featuresInAnchorFrame(anchor), localization_, fitting_, usable);
+      if (!localization.ok() || onAnAnchorsPose(localization)) continue;
+      const PendingLocalization current{frame, localization};
+      const auto agreeing = std::find_if(found.begin(), found.end(), [&](const PendingLocalization& earlier) {
+        return agreeWithOdometry(earlier, current, estimates);
+      });
+      if (agreeing == found.end()) {
+        found.push_back(current);
+        continue;
+      }
+      joined.push_back(candidateFrom(agreeing->localization, agreeing->frame));
+      joined.push_back(candidateFrom(localization, frame));
+      joinSegments(segment, kMapSegment);
+      break;
+    }
+  }
+  return joined;
+}
+
+bool LoopCloser::agreeWithOdometry(const PendingLocalization& a, const PendingLocalization& b,
+                                   const std::vector<Pose2>& estimates) const {
+  const Pose2 by_localization = between(a.localization.T_map_robot, b.localization.T_map_robot);
+  const Pose2 by_odometry = between(estimates[static_cast<size_t>(a.frame)], estimates[static_cast<size_t>(b.frame)]);
+  const Pose2 disagreement = by_odometry.inverse() * by_localization;
+  return disagreement.translation().norm() <= localization_.max_odometry_disagreement_m &&
+         std::abs(disagreement.theta) <= localization_.max_odometry_disagreement_rad;
+}
+
+void LoopCloser::joinSegments(int from, int to) {
+  for (int& s : segment_of_frame_) {
+    if (s == from) s = to;
+  }
+  feature_map_.mergeSegment(from, to);
 }
 
 }  // namespace groundslam

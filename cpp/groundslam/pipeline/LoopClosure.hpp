@@ -57,7 +57,7 @@ struct LoopClosureSettings {
 };
 
 /// Which gate a candidate failed ("" when accepted).
-enum class LoopGate { none, bow_score, matches, covariance, ambiguous };
+enum class LoopGate { none, bow_score, matches, covariance, ambiguous, outside_prior };
 const char* loopGateName(LoopGate gate);
 
 /// One verified candidate: frame_a (earlier) against frame_b (current).
@@ -91,6 +91,13 @@ class LoopCloser {
   /// when the next one agrees with odometry; then both are returned as loop candidates (frame_a: the map
   /// keyframe, frame_b: the lost frame) and the frame's segment joins the map segment.
   std::vector<LoopCandidate> relocalize(int frame, const GroundFeatures& features, const std::vector<Pose2>& estimates);
+  /// After a lost segment joined the map: the segments lost before it that never joined (tracking was lost
+  /// again first) are localized on the map now, which may have grown onto their ground. A segment joins when
+  /// two of its places localize in agreement with its odometry; both localizations are returned.
+  std::vector<LoopCandidate> joinOrphanSegments(const std::vector<Pose2>& estimates);
+  /// Segment `from` was joined to segment `to` another way (a bridge over the loss): its frames and map keyframes
+  /// belong to `to` from now on.
+  void joinSegments(int from, int to);
   /// Tracking was lost after the last frame processed: the frames still waiting their k frames become places
   /// and map keyframes at once. The delay keeps neighbours from closing loops, and across a loss there are no
   /// neighbours (candidates never cross segments); relocalization can then find the ground seen just before,
@@ -130,6 +137,9 @@ class LoopCloser {
   std::vector<LoopCandidate> verifyCandidates(int frame, const GroundFeatures& features, const BowVector& bow,
                                               const std::vector<Pose2>& estimates);
   std::vector<BowMatch> selectCandidates(int frame, const BowVector& bow, const std::vector<Pose2>& estimates) const;
+  /// A place already covers `position` (a frame's estimate): any place for a frame of the map segment, only the
+  /// segment's own places for a frame of a lost segment.
+  bool coveredInItsSegment(int frame, const Eigen::Vector2d& position) const;
   /// Lets the frames waiting up to `last` into the database and the feature map.
   void admitPlaces(int last, const std::vector<Pose2>& estimates);
   LoopCandidate verify(int frame_a, const GroundFeatures& a, int frame_b, const GroundFeatures& b, double bow_score,
@@ -146,6 +156,9 @@ class LoopCloser {
     Localization localization;
   };
   LoopCandidate candidateFrom(const Localization& localization, int frame) const;
+  /// Two localizations of one segment's frames agree with what its odometry measured between them.
+  bool agreeWithOdometry(const PendingLocalization& a, const PendingLocalization& b, const std::vector<Pose2>& estimates) const;
+
   /// A localization on a map keyframe's own pose (LocalizationSettings::min_anchor_offset_*): camera artifacts.
   bool onAnAnchorsPose(const Localization& localization) const;
 

@@ -77,6 +77,7 @@ FrameResult Slam::process(PreparedFrame prepared) {
   if (prepared.matches_to_previous) result.times.match_ms = prepared.match_ms;
 
   std::vector<Match> still;  // matches of this frame to the previous one that stayed still in the image
+  bool tied_to_previous = false;  // odometry measured this frame's motion: it is in the previous frame's segment
   // §III-B: match to the previous image, fit T_prev_curr with a robust M-estimator (eqs. 5-6), add the edge.
   if (previous_) {
     OdometryEdge odometry = estimateOdometry(*previous_, current, prepared.matches_to_previous, prepared.alignment, result);
@@ -142,6 +143,7 @@ FrameResult Slam::process(PreparedFrame prepared) {
                     : !vouched ? FrameStatus::uncertain
                                           : FrameStatus::ok;
     if (odometry.fallback) result.fallback_reason = odometry.fit_status;
+    tied_to_previous = !odometry.fallback;
     measured_.push_back((!odometry.fallback && !lost_) || map_start_ == frame);
   } else if (prior_frames_ > 0) {
     // On a prior map the first frame's pose is unknown until global localization finds it.
@@ -169,6 +171,9 @@ FrameResult Slam::process(PreparedFrame prepared) {
     if (lost_) bridgeLoss(current, prepared.alignment, result);
   } else if (prior_frames_ > 0) closeLoopsOnPriorMap(ground, result);
   optimiseIfDue(result, false);
+  // Once the map holds the segment just found in place: segments lost again before they were found may lie on its
+  // ground.
+  if (orphans_due_ && !lost_) joinOrphanSegments(result);
 
   result.T_world_robot = graph_.poses().back();
   if (lost_ || !measuredByOdometry(result.status)) recent_.clear();
@@ -177,11 +182,15 @@ FrameResult Slam::process(PreparedFrame prepared) {
     while (recent_.size() > 30) recent_.pop_front();
   }
   previous_ = std::move(current);
-  if (!lost_ && measured_.back()) {
+  // Inside a lost segment too, once the frames right after its loss have had their bridge to the frame before it.
+  const bool in_lost_segment = lost_ && tied_to_previous && frame >= lost_since_ + config_.odometry_checks.bridge_max_frames;
+  if ((!lost_ && measured_.back()) || in_lost_segment) {
     tracked_keyframe_ = previous_;
     tracked_alignment_ = prepared.alignment;  // shares the pixels: neither is changed
     tracked_frame_ = frame;
     tracked_time_ = prepared.timestamp;
+    tracked_segment_ = lost_ ? segment_ : kMapSegment;
+    tracked_segment_start_ = lost_since_;
   }
   previous_alignment_ = std::move(prepared.alignment);
   previous_tracking_ = std::move(prepared.tracking);
@@ -248,7 +257,7 @@ void Slam::startSegment(const OdometryEdge& failed) {
   loop_closer_->trackingLost(graph_.poses());
   pending_search_.reset();
   ever_lost_ = true;
-  ++segment_;
+  segment_ = ++segments_started_;  // never one used before: an earlier lost segment may still wait to join
   lost_ = true;
   lost_since_ = to;
 }
@@ -277,12 +286,34 @@ void Slam::relocalize(const Keyframe& current, FrameResult& result) {
   joinMap(result);
 }
 
+void Slam::joinOrphanSegments(FrameResult& result) {
+  orphans_due_ = false;
+  StageTimer timer;
+  const std::vector<LoopCandidate> joined = loop_closer_->joinOrphanSegments(graph_.poses());
+  result.times.loop_ms += timer.lap();
+  if (joined.empty()) return;
+  for (const LoopCandidate& candidate : joined) {
+    report(reported(candidate));
+    graph_.addEdge({candidate.frame_a, candidate.frame_b, candidate.T_a_b,
+                    informationFrom(candidate.covariance, config_.graph.min_sigma_m, config_.graph.min_sigma_rad), true});
+    ++result.loop_closures;
+  }
+  for (size_t i = 0; i < measured_.size(); ++i) {
+    if (!measured_[i] && loop_closer_->segmentOf(static_cast<int>(i)) == kMapSegment) measured_[i] = true;
+  }
+  ++unoptimised_loops_;
+  full_optimisation_due_ = true;
+  optimise_now_ = true;
+  optimiseIfDue(result, false);
+}
+
 void Slam::joinMap(FrameResult& result) {
   // The frames since the loss snap into place: the whole graph is optimised now.
   segment_ = kMapSegment;
   pending_search_.reset();
   for (size_t i = static_cast<size_t>(lost_since_); i < measured_.size(); ++i) measured_[i] = true;
   lost_ = false;
+  orphans_due_ = true;
   result.status = FrameStatus::relocalized;
   ++unoptimised_loops_;
   full_optimisation_due_ = true;
@@ -299,7 +330,7 @@ void Slam::usePriorMap(const FeatureMap& prior) {
   }
   loop_closer_->adoptPriorMap(prior);
   prior_frames_ = static_cast<int>(prior.anchors().size());
-  segment_ = kMapSegment + 1;
+  segment_ = ++segments_started_;
   lost_ = true;
   lost_since_ = prior_frames_;
 }

@@ -156,6 +156,9 @@ class Slam {
   std::optional<Bridge> confirmedSearch(const Keyframe& current);
   /// The current segment joins the map (a relocalization): its frames count as measured, the graph is optimised.
   void joinMap(FrameResult& result);
+  /// Lost segments that never joined the map are localized on it (after a segment joined it and was optimised in
+  /// place); those found join it.
+  void joinOrphanSegments(FrameResult& result);
   /// The pixel warp (current image to previous) a ground motion T_prev_curr makes, and the ground motion of a warp;
   /// both through the calibrated camera, over a grid of the image's pixels.
   cv::Matx23d imageWarpOf(const Pose2& T_prev_curr) const;
@@ -309,6 +312,10 @@ class Slam {
   std::optional<Keyframe> tracked_keyframe_;  ///< its features as projected with its mount (bridgeByFeatures)
   int tracked_frame_ = -1;
   double tracked_time_ = 0.0;
+  /// The tracked frame's segment and that segment's first frame: a loss inside a lost segment is bridged to the
+  /// segment's own frames, and the new segment joins it (not the map).
+  int tracked_segment_ = kMapSegment;
+  int tracked_segment_start_ = 0;
   ImageAlignmentSettings alignment_settings_;
   PointTrackingSettings point_tracking_;  ///< outdoor.track_points
   std::optional<OdometryEdge> last_good_odometry_;
@@ -344,6 +351,8 @@ class Slam {
   int last_optimised_frame_ = -1000000;
   bool optimise_now_ = false;  ///< a relocalization joined a segment: optimise the whole graph at once
   int segment_ = kMapSegment;  ///< the current tracking segment
+  int segments_started_ = kMapSegment;  ///< the last segment number given out
+  bool orphans_due_ = false;  ///< a segment joined the map: earlier lost segments are to be localized on it
   bool lost_ = false;          ///< tracking was lost and the current segment is not yet joined to the map
   int lost_since_ = 0;         ///< first frame of the current segment
   int map_start_ = 0;          ///< the map's first frame (later than 0 when tracking was lost at once)

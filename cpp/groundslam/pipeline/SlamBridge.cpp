@@ -16,7 +16,7 @@ void Slam::bridgeLoss(const Keyframe& current, const AlignmentImage& alignment, 
   // Only a loss for too little evidence (one blurred or covered image, a patch of smooth floor) or for the robot's
   // speed (frames dropped without a trace), on a floor that does not repeat: there a motion spanning the lost frames
   // matches one repetition over as readily as the right one.
-  if (!bridgeable_loss_ || repeatedFloor(current.index) || !tracked_keyframe_ || frames_since < 1 ||
+  if (!bridgeable_loss_ || repeatedFloor(current.index) || !tracked_keyframe_ || tracked_frame_ >= lost_since_ || frames_since < 1 ||
       frames_since > config_.odometry_checks.bridge_max_frames) {
     return;
   }
@@ -32,6 +32,16 @@ void Slam::bridgeLoss(const Keyframe& current, const AlignmentImage& alignment, 
   if (!bridge) return;
   graph_.addEdge({tracked_frame_, current.index, bridge->T_tracked_current,
                   informationFrom(bridge->covariance, config_.graph.min_sigma_m, config_.graph.min_sigma_rad), true});
+  bridgeable_loss_ = false;
+  if (tracked_segment_ != kMapSegment) {
+    // Lost again inside a lost segment: the new segment continues that one, which may still be found.
+    loop_closer_->joinSegments(segment_, tracked_segment_);
+    segment_ = tracked_segment_;
+    lost_since_ = tracked_segment_start_;
+    pending_search_.reset();
+    return;
+  }
+  loop_closer_->joinSegments(segment_, kMapSegment);
   joinMap(result);
 }
 
