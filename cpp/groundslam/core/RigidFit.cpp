@@ -165,10 +165,14 @@ bool farApart(const Pose2& a, const Pose2& b, const FitSettings& settings) {
   return (a.translation() - b.translation()).norm() > 0.01 || rotation > 3.0 * M_PI / 180.0;
 }
 
-bool withinPrior(const Pose2& T, const std::optional<TransformPrior>& prior) { return !prior || groundslam::withinPrior(T, *prior); }
-
 /// 2-point RANSAC: the hypothesis with the most inliers. Stops early once the inlier ratio makes a
 /// better one unlikely (99.9% confidence), unless every hypothesis is wanted to measure ambiguity.
+bool withinPrior(const Pose2& T, const std::optional<TransformPrior>& prior) {
+  if (!prior) return true;
+  const Pose2 difference = prior->T_target_source.inverse() * T;
+  return difference.translation().norm() <= prior->radius_m && std::abs(difference.theta) <= prior->radius_rad;
+}
+
 RansacResult ransac(const std::vector<Eigen::Vector2d>& target, const std::vector<Eigen::Vector2d>& source,
                     const FitSettings& settings, const std::optional<TransformPrior>& prior) {
   std::mt19937 rng(static_cast<std::mt19937::result_type>(settings.seed));
@@ -325,11 +329,6 @@ bool withinAtSigmas(const Eigen::Matrix3d& covariance, double sigmas, double wit
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> position(covariance.topLeftCorner<2, 2>());
   const double sigma_m = std::sqrt(std::max(0.0, position.eigenvalues().maxCoeff()));
   return sigmas * sigma_rad <= within_rad && sigmas * sigma_m <= within_m;
-}
-
-bool withinPrior(const Pose2& T, const TransformPrior& prior) {
-  const Pose2 difference = prior.T_target_source.inverse() * T;
-  return difference.translation().norm() <= prior.radius_m && std::abs(difference.theta) <= prior.radius_rad;
 }
 
 }  // namespace groundslam

@@ -42,9 +42,6 @@ struct TransformPrior {
   double radius_rad = 0.0;  ///< largest rotation difference considered
 };
 
-/// T lies within the prior's window (always, without a prior).
-bool withinPrior(const Pose2& T, const TransformPrior& prior);
-
 /// `ambiguous`: set by callers that refuse a fit another transform explains almost as well (repetitive floors);
 /// `implausible_motion`: set by callers that refuse a motion far from the one the robot was making.
 enum class FitStatus { ok, too_few_matches, too_few_inliers, degenerate, solver_failed, ambiguous, implausible_motion };

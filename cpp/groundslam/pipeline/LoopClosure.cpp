@@ -40,7 +40,6 @@ const char* loopGateName(LoopGate gate) {
     case LoopGate::matches: return "matches";
     case LoopGate::covariance: return "covariance";
     case LoopGate::ambiguous: return "ambiguous";
-    case LoopGate::outside_prior: return "outside_prior";
   }
   return "unknown";
 }
@@ -134,23 +133,13 @@ void LoopCloser::admitPlaces(int last, const std::vector<Pose2>& estimates) {
   while (!pending_.empty() && pending_.front().frame <= last) {
     Pending& entering = pending_.front();
     const Eigen::Vector2d position = estimates[static_cast<size_t>(entering.frame)].translation();
-    if (!coveredInItsSegment(entering.frame, position)) {
+    if (!places_.covers(position, settings_.place_spacing_m)) {
       places_.add(entering.frame, position, entering.features, std::move(entering.bow));
       feature_map_.addAnchor(entering.frame, estimates[static_cast<size_t>(entering.frame)], segmentOf(entering.frame),
                              entering.features);
     }
     pending_.pop_front();
   }
-}
-
-bool LoopCloser::coveredInItsSegment(int frame, const Eigen::Vector2d& position) const {
-  const int segment = segmentOf(frame);
-  if (segment == kMapSegment) return places_.covers(position, settings_.place_spacing_m);
-  // A lost segment's positions are relative to a guess: only its own places may cover them.
-  for (const Place* place : places_.near(position, settings_.place_spacing_m)) {
-    if (segmentOf(place->frame) == segment && (place->position - position).norm() < settings_.place_spacing_m) return true;
-  }
-  return false;
 }
 
 std::vector<BowMatch> LoopCloser::selectCandidates(int frame, const BowVector& bow, const std::vector<Pose2>& estimates) const {
@@ -242,11 +231,6 @@ LoopCandidate LoopCloser::verify(int frame_a, const GroundFeatures& a, int frame
   } else if (candidate.ambiguity > settings_.max_ambiguity) {
     // Not in the paper: on a repetitive floor a transform shifted by one tile fits almost as well.
     candidate.rejected_by = LoopGate::ambiguous;
-  } else if (!withinPrior(fit.T_target_source, prior)) {
-    // Not in the paper: RANSAC drew its hypotheses inside the window the map can believe; a fit its inliers pulled
-    // out of it rests on the wrong inliers (measured outdoors: a carpet loop fit 2.4 degrees past a 2-degree
-    // window, 2.8 degrees off the truth, through every other gate).
-    candidate.rejected_by = LoopGate::outside_prior;
   }
   return candidate;
 }

@@ -57,7 +57,7 @@ struct LoopClosureSettings {
 };
 
 /// Which gate a candidate failed ("" when accepted).
-enum class LoopGate { none, bow_score, matches, covariance, ambiguous, outside_prior };
+enum class LoopGate { none, bow_score, matches, covariance, ambiguous };
 const char* loopGateName(LoopGate gate);
 
 /// One verified candidate: frame_a (earlier) against frame_b (current).
@@ -137,9 +137,6 @@ class LoopCloser {
   std::vector<LoopCandidate> verifyCandidates(int frame, const GroundFeatures& features, const BowVector& bow,
                                               const std::vector<Pose2>& estimates);
   std::vector<BowMatch> selectCandidates(int frame, const BowVector& bow, const std::vector<Pose2>& estimates) const;
-  /// A place already covers `position` (a frame's estimate): any place for a frame of the map segment, only the
-  /// segment's own places for a frame of a lost segment.
-  bool coveredInItsSegment(int frame, const Eigen::Vector2d& position) const;
   /// Lets the frames waiting up to `last` into the database and the feature map.
   void admitPlaces(int last, const std::vector<Pose2>& estimates);
   LoopCandidate verify(int frame_a, const GroundFeatures& a, int frame_b, const GroundFeatures& b, double bow_score,
