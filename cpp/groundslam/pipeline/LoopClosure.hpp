@@ -93,9 +93,9 @@ class LoopCloser {
   std::vector<LoopCandidate> relocalize(int frame, const GroundFeatures& features, const std::vector<Pose2>& estimates);
   /// After a lost segment joined the map: the segments lost before it that never joined (tracking was lost
   /// again first) are localized on the map now, which may have grown onto their ground. A segment joins when
-  /// two of its places localize in agreement with its odometry; both localizations are returned.
+  /// two of its map keyframes localize in agreement with its odometry; both localizations are returned.
   std::vector<LoopCandidate> joinOrphanSegments(const std::vector<Pose2>& estimates);
-  /// Segment `from` was joined to segment `to` another way (a bridge over the loss): its frames and map keyframes
+  /// Segment `from` joins segment `to` (a relocalization, or a bridge over the loss): its frames and map keyframes
   /// belong to `to` from now on.
   void joinSegments(int from, int to);
   /// Tracking was lost after the last frame processed: the frames still waiting their k frames become places
@@ -155,7 +155,6 @@ class LoopCloser {
   LoopCandidate candidateFrom(const Localization& localization, int frame) const;
   /// Two localizations of one segment's frames agree with what its odometry measured between them.
   bool agreeWithOdometry(const PendingLocalization& a, const PendingLocalization& b, const std::vector<Pose2>& estimates) const;
-
   /// A localization on a map keyframe's own pose (LocalizationSettings::min_anchor_offset_*): camera artifacts.
   bool onAnAnchorsPose(const Localization& localization) const;
 

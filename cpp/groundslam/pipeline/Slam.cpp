@@ -277,13 +277,17 @@ void Slam::relocalize(const Keyframe& current, FrameResult& result) {
   const std::vector<LoopCandidate> joined = loop_closer_->relocalize(current.index, current.features, graph_.poses());
   result.times.loop_ms += timer.lap();
   if (joined.empty()) return;
+  addLocalizationEdges(joined, result);
+  joinMap(result);
+}
+
+void Slam::addLocalizationEdges(const std::vector<LoopCandidate>& joined, FrameResult& result) {
   for (const LoopCandidate& candidate : joined) {
     report(reported(candidate));
     graph_.addEdge({candidate.frame_a, candidate.frame_b, candidate.T_a_b,
                     informationFrom(candidate.covariance, config_.graph.min_sigma_m, config_.graph.min_sigma_rad), true});
     ++result.loop_closures;
   }
-  joinMap(result);
 }
 
 void Slam::joinOrphanSegments(FrameResult& result) {
@@ -292,12 +296,7 @@ void Slam::joinOrphanSegments(FrameResult& result) {
   const std::vector<LoopCandidate> joined = loop_closer_->joinOrphanSegments(graph_.poses());
   result.times.loop_ms += timer.lap();
   if (joined.empty()) return;
-  for (const LoopCandidate& candidate : joined) {
-    report(reported(candidate));
-    graph_.addEdge({candidate.frame_a, candidate.frame_b, candidate.T_a_b,
-                    informationFrom(candidate.covariance, config_.graph.min_sigma_m, config_.graph.min_sigma_rad), true});
-    ++result.loop_closures;
-  }
+  addLocalizationEdges(joined, result);
   for (size_t i = 0; i < measured_.size(); ++i) {
     if (!measured_[i] && loop_closer_->segmentOf(static_cast<int>(i)) == kMapSegment) measured_[i] = true;
   }

@@ -136,7 +136,8 @@ class Slam {
   std::optional<ImageAlignment> alignFromSteps(const AlignmentImage& before, const AlignmentImage& now, int steps) const;
   /// Right after tracking was lost (within odometry.bridge_max_frames frames): the current frame measured against
   /// the last tracked one joins the segment to the map, as a relocalization would (the map may not reach where the
-  /// robot goes, and weak floors give global localization too little). By its features first, else by its image.
+  /// robot goes, and weak floors give global localization too little); when that frame is of a lost segment, the
+  /// new segment continues that one instead. By its features first, else by its image.
   void bridgeLoss(const Keyframe& current, const AlignmentImage& alignment, FrameResult& result);
   /// A motion from the last tracked frame to the current one, and its covariance.
   struct Bridge {
@@ -159,6 +160,8 @@ class Slam {
   /// Lost segments that never joined the map are localized on it (after a segment joined it and was optimised in
   /// place); those found join it.
   void joinOrphanSegments(FrameResult& result);
+  /// Localizations of lost frames on the map become loop edges, reported like loop closures.
+  void addLocalizationEdges(const std::vector<LoopCandidate>& joined, FrameResult& result);
   /// The pixel warp (current image to previous) a ground motion T_prev_curr makes, and the ground motion of a warp;
   /// both through the calibrated camera, over a grid of the image's pixels.
   cv::Matx23d imageWarpOf(const Pose2& T_prev_curr) const;
