@@ -3,7 +3,6 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <random>
 
 #include <gtest/gtest.h>
 
@@ -582,41 +581,6 @@ TEST(GlobalLocalization, AFrameLocalizesOnAMapOfItselfAtAnyPoseAndHeading) {
   const Localization none = localizeGlobally(elsewhere, preparer.prepare(other.renderFrame(0), 0).features, LocalizationSettings{},
                                              Config{}.odometry);
   EXPECT_FALSE(none.ok());
-}
-
-TEST(GlobalLocalization, QueriesCrowdingOneMapFeatureCountOnce) {
-  // A blob in the image (a dirt spot, the glare's rim) gives several keypoints 1.5 mm apart with nearly one
-  // descriptor. In the guided re-matching each finds the same map feature, alone in its window, and passes the ratio
-  // test; a robust fit would count all six as inliers. Each map feature keeps one spot of the image.
-  const auto settings = session("carpet", sim::PathKind::loop, 10, 1);
-  const sim::SequenceSimulator simulator(settings);
-  const FramePreparer preparer(configFor(settings));
-  const GroundFeatures features = preparer.prepare(simulator.renderFrame(0), 0).features;
-  FeatureMap map(shippedVocabulary());
-  map.addAnchor(0, Pose2(), 0, features);
-  const Localization clean = localizeGlobally(map, features, LocalizationSettings{}, Config{}.odometry);
-  ASSERT_TRUE(clean.ok()) << localizationStatusName(clean.status);
-  GroundFeatures crowded = features;
-  std::mt19937 rng(5);
-  std::uniform_int_distribution<int> bit(0, 255);
-  const size_t k = features.size() / 2;
-  for (int i = 0; i < 6; ++i) {
-    const double a = i * M_PI / 3.0;
-    crowded.points.push_back(features.points[k] + 0.0015 * Eigen::Vector2d(std::cos(a), std::sin(a)));
-    cv::Mat descriptor = features.descriptors.row(static_cast<int>(k)).clone();
-    for (int b = 0; b < 4 + i; ++b) {
-      const int flip = bit(rng);
-      descriptor.at<unsigned char>(0, flip / 8) = static_cast<unsigned char>(descriptor.at<unsigned char>(0, flip / 8) ^ (1 << (flip % 8)));
-    }
-    crowded.descriptors.push_back(descriptor);
-    crowded.angles_rad.push_back(features.angles_rad[k]);
-    crowded.octaves.push_back(features.octaves[k]);
-    if (features.hasRays()) crowded.rays.push_back(features.rays[k]);
-  }
-  const Localization l = localizeGlobally(map, crowded, LocalizationSettings{}, Config{}.odometry);
-  ASSERT_TRUE(l.ok()) << localizationStatusName(l.status);
-  EXPECT_EQ(l.inliers, clean.inliers);  // each of the six counted: clean.inliers + 6
-  EXPECT_LT(l.T_map_robot.translation().norm(), 1e-4);
 }
 
 TEST(Relocalization, TheRobotsOwnArtifactsStayOutOfTheMap) {

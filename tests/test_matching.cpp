@@ -151,39 +151,6 @@ TEST(Matching, GuidedMatchingComparesOnlyNearbyFeatures) {
   EXPECT_TRUE(matchNearby(query, train, Pose2(0.3, 0.3, 0.0) * T_train_query, 0.004, 0.7).empty());
 }
 
-TEST(Matching, OneSpotPerTrainKeepsTheNearestQueryAndItsCopiesOnly) {
-  // One train feature alone in its window (a dirt spot) with five query features 2-3 mm apart around where it is
-  // predicted: each finds it as its only candidate, so each passes the ratio test. Only the nearest in Hamming
-  // distance (the 3-bit copy) keeps it, with a second detection of that corner 0.3 mm away (another scale); the
-  // others are dropped, not left for a robust fit to count as inliers.
-  std::mt19937 rng(3);
-  const cv::Mat unique = randomDescriptors(2, 7);
-  GroundFeatures train, query;
-  train.points = {{0.0, 0.0}, {0.05, 0.0}};
-  train.descriptors = unique.clone();
-  const int flipped[] = {40, 25, 3, 60, 25};
-  for (int i = 0; i < 5; ++i) {
-    query.points.push_back({0.002 * (i - 2), 0.001 * i});
-    query.descriptors.push_back(flipBits(unique.row(0), flipped[i], rng));
-  }
-  query.points.push_back({0.05, 0.001});  // the other train feature's own, unique query
-  query.descriptors.push_back(flipBits(unique.row(1), 10, rng));
-  query.points.push_back({0.0003, 0.002});  // query 2's corner at another scale
-  query.descriptors.push_back(flipBits(unique.row(0), 12, rng));
-  const auto all = matchNearby(query, train, Pose2(), 0.006, 0.7);
-  ASSERT_EQ(all.size(), 7u);  // each query finds its train feature
-  const auto matches = oneSpotPerTrain(all, query, train.size(), 0.001);
-  ASSERT_EQ(matches.size(), 3u);
-  EXPECT_EQ(matches[0].query, 2);
-  EXPECT_EQ(matches[0].train, 0);
-  EXPECT_LE(matches[0].distance, 3);
-  EXPECT_EQ(matches[1].query, 5);
-  EXPECT_EQ(matches[1].train, 1);
-  EXPECT_EQ(matches[2].query, 6);
-  EXPECT_EQ(matches[2].train, 0);
-  EXPECT_EQ(oneSpotPerTrain(all, query, train.size(), 0.0).size(), 2u);  // one query per train feature
-}
-
 TEST(NearestDescriptors, EveryKernelGivesTheScalarAnswerWithTiesAndPartialBlocks) {
   std::mt19937 rng(5);
   std::vector<HammingKernel> kernels = supportedHammingKernels();

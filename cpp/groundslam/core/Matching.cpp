@@ -143,26 +143,4 @@ std::vector<Match> matchNearby(const GroundFeatures& query, const GroundFeatures
   return matches;
 }
 
-// Not in the paper: a window holding one train feature passes the ratio test for any query near it, so one blob
-// (a dirt spot, the glare's rim) can collect several queries a millimetre or two apart that a robust fit counts as
-// inliers (measured: relocalizations 3 degrees off on an outdoor carpet). A train feature keeps its nearest query in
-// Hamming distance (the first of equals) and the others at the same spot: ORB finds one corner at several pyramid
-// levels, and such copies are right, not rivals.
-std::vector<Match> oneSpotPerTrain(const std::vector<Match>& matches, const GroundFeatures& query, size_t train_count,
-                                   double same_spot_m) {
-  std::vector<int> best(train_count, -1);
-  for (size_t i = 0; i < matches.size(); ++i) {
-    int& b = best[static_cast<size_t>(matches[i].train)];
-    if (b < 0 || matches[i].distance < matches[static_cast<size_t>(b)].distance) b = static_cast<int>(i);
-  }
-  std::vector<Match> kept;
-  kept.reserve(matches.size());
-  for (const Match& m : matches) {
-    const Match& nearest = matches[static_cast<size_t>(best[static_cast<size_t>(m.train)])];
-    const Eigen::Vector2d& at = query.points[static_cast<size_t>(m.query)];
-    if ((at - query.points[static_cast<size_t>(nearest.query)]).norm() <= same_spot_m) kept.push_back(m);
-  }
-  return kept;
-}
-
 }  // namespace groundslam

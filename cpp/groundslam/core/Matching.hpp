@@ -48,10 +48,4 @@ class DescriptorMatcher {
 std::vector<Match> matchNearby(const GroundFeatures& query, const GroundFeatures& train, const Pose2& T_train_query,
                                double radius_m, double ratio);
 
-/// For the guided matches that verify a global localization, where a window holding one train feature passes the
-/// ratio test for any query near it: a train feature that several queries chose keeps the nearest of them in Hamming distance
-/// (the first of equals) and those within same_spot_m of it (one corner found at several scales), no others.
-std::vector<Match> oneSpotPerTrain(const std::vector<Match>& matches, const GroundFeatures& query, size_t train_count,
-                                   double same_spot_m);
-
 }  // namespace groundslam

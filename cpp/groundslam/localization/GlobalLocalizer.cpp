@@ -167,9 +167,7 @@ std::optional<Verified> verifyPeak(const FeatureMap& map, const GroundFeatures& 
   const RigidEstimate coarse = fitRigidTransform(target, source, fitting, around_peak);
   if (!coarse.ok()) return std::nullopt;
   const GroundFeatures nearby = mapFeaturesAround(map, coarse.T_target_source.translation(), s.footprint_radius_m, usable);
-  // Keypoints closer together than half the inlier distance are one spot to the fit.
-  const std::vector<Match> matches = oneSpotPerTrain(matchNearby(query, nearby, coarse.T_target_source, s.match_radius_m, s.ratio),
-                                                     query, nearby.size(), fitting.ransac_inlier_m / 2);
+  const std::vector<Match> matches = matchNearby(query, nearby, coarse.T_target_source, s.match_radius_m, s.ratio);
   target.clear();
   source.clear();
   for (const Match& m : matches) {
