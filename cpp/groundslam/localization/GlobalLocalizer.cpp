@@ -184,16 +184,6 @@ std::optional<Verified> verifyPeak(const FeatureMap& map, const GroundFeatures& 
   return verified;
 }
 
-/// Within min_anchor_offset_m and min_anchor_offset_rad of a usable anchor's own pose.
-bool onAnAnchorsPose(const FeatureMap& map, const Pose2& T_map_robot, const LocalizationSettings& s, const AnchorFilter& usable) {
-  for (size_t a = 0; a < map.anchors().size(); ++a) {
-    if (!usable.empty() && !usable[a]) continue;
-    const Pose2 offset = map.anchors()[a].T_map_anchor.inverse() * T_map_robot;
-    if (offset.translation().norm() < s.min_anchor_offset_m && std::abs(offset.theta) < s.min_anchor_offset_rad) return true;
-  }
-  return false;
-}
-
 }  // namespace
 
 const char* localizationStatusName(LocalizationStatus status) {
@@ -214,40 +204,24 @@ Localization localizeGlobally(const FeatureMap& map, const GroundFeatures& query
   if (!query.hasOrientations() || map.features().empty()) return result;
   const VoteGrid grid(s);
   const auto cells = castVotes(map, query, grid, s, usable);
-  // Up to twice max_peaks: a peak the vote-ratio test would count is verified rather than counted, while any is left.
-  const std::vector<Peak> peaks = findPeaks(cells, grid, 2 * static_cast<size_t>(s.max_peaks) + 1);
+  const std::vector<Peak> peaks = findPeaks(cells, grid, static_cast<size_t>(s.max_peaks) + 1);
   if (peaks.empty() || peaks.front().votes < s.min_votes) return result;
   // Verify the strongest peaks; the one whose pose the most map features confirm wins. On a repetitive floor
   // another repetition is confirmed almost as well: the winner must clearly beat every rival pose.
   result.status = LocalizationStatus::too_few_inliers;
   std::vector<std::pair<Verified, size_t>> verified;  // with the peak's index
-  std::vector<bool> refuted(peaks.size(), false);     // verified, and no pose with min_inliers fits its pairs
-  const auto mostVotesVerified = [&]() {
-    int votes = 0;
-    for (const auto& v : verified) votes = std::max(votes, peaks[v.second].votes);
-    return votes;
-  };
-  for (size_t p = 0; p < peaks.size() && p < 2 * static_cast<size_t>(s.max_peaks); ++p) {
+  for (size_t p = 0; p < peaks.size() && p < static_cast<size_t>(s.max_peaks); ++p) {
     if (peaks[p].votes < s.min_votes) break;
-    // Past max_peaks, only peaks that would make the vote-ratio test fail (a repetition found by votes alone).
-    if (p >= static_cast<size_t>(s.max_peaks) && static_cast<double>(peaks[p].votes) <= s.max_vote_ratio * mostVotesVerified()) break;
     auto v = verifyPeak(map, query, peaks[p], cells, grid, s, fitting, usable);
-    refuted[p] = !v || !v->fit.ok() || v->fit.inliers < s.min_inliers;
     if (v && v->fit.ok()) verified.emplace_back(std::move(*v), p);
   }
   if (verified.empty()) return result;
   std::sort(verified.begin(), verified.end(), [](const auto& a, const auto& b) { return a.first.fit.inliers > b.first.fit.inliers; });
   const Verified& best = verified.front().first;
-  const auto samePose = [&](const Pose2& T) {
-    const Pose2 difference = best.fit.T_target_source.inverse() * T;
-    return difference.translation().norm() <= 2.0 * s.match_radius_m && std::abs(difference.theta) <= 2.0 * M_PI / 180.0;
-  };
   int rival = 0;
-  std::vector<bool> agrees(peaks.size(), false);  // verified to the winner's pose: the same place
   for (size_t i = 1; i < verified.size(); ++i) {
-    if (samePose(verified[i].first.fit.T_target_source)) {
-      agrees[verified[i].second] = true;
-    } else {
+    const Pose2 difference = best.fit.T_target_source.inverse() * verified[i].first.fit.T_target_source;
+    if (difference.translation().norm() > 2.0 * s.match_radius_m || std::abs(difference.theta) > 2.0 * M_PI / 180.0) {
       rival = std::max(rival, verified[i].first.fit.inliers);
     }
   }
@@ -257,21 +231,12 @@ Localization localizeGlobally(const FeatureMap& map, const GroundFeatures& query
   result.votes = peaks[winner].votes;
   result.inliers = best.fit.inliers;
   result.runner_up_inliers = rival;
-  // Votes too: on a repetitive floor many peaks, one per repetition, collect about as many votes. A peak whose
-  // verification found no pose, or found the winner's, is no rival: only the verified rivals and the peaks left
-  // unverified count.
-  int rival_votes = 0, any_rival_votes = 0;
+  // Votes too: on a repetitive floor many peaks, one per repetition, collect about as many votes.
+  int rival_votes = 0;
   for (size_t p = 0; p < peaks.size(); ++p) {
-    if (p == winner) continue;
-    any_rival_votes = std::max(any_rival_votes, peaks[p].votes);
-    if (!refuted[p] && !agrees[p]) rival_votes = std::max(rival_votes, peaks[p].votes);
+    if (p != winner) rival_votes = std::max(rival_votes, peaks[p].votes);
   }
   result.runner_up_votes = rival_votes;
-  // A winner that beat the other peaks' votes only once verification had refuted them is a place found by few votes.
-  // What stays at the same pixels of every image (shadow, dirt, a bumper's bolts) puts such a place exactly on a
-  // keyframe's own pose, where a true revisit almost never lands: there it is ambiguous.
-  const bool few_votes = static_cast<double>(any_rival_votes) > s.max_vote_ratio * static_cast<double>(result.votes);
-  if (few_votes && onAnAnchorsPose(map, result.T_map_robot, s, usable)) rival_votes = any_rival_votes;
   if (result.inliers < s.min_inliers) {
     result.status = LocalizationStatus::too_few_inliers;
   } else if (static_cast<double>(rival) > s.max_rival_ratio * static_cast<double>(result.inliers) ||
