@@ -48,6 +48,11 @@ class PoseGraph {
   const std::vector<Pose2>& poses() const { return poses_; }
   const std::vector<GraphEdge>& edges() const { return edges_; }
   void setPose(int index, const Pose2& T_world_robot) { poses_[static_cast<size_t>(index)] = T_world_robot; }
+  /// A new measurement and information for edge `index` (same poses: a measurement made again, more precisely).
+  void remeasureEdge(size_t index, const Pose2& T_from_to, const Eigen::Matrix3d& information) {
+    edges_[index].T_from_to = T_from_to;
+    edges_[index].information = information;
+  }
 
  private:
   PoseGraphSettings settings_;

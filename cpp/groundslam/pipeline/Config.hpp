@@ -42,7 +42,7 @@ struct FallbackSettings {
 /// How measurements become graph edges and when the graph is optimised.
 struct GraphConfig {
   double min_sigma_m = 0.0005;     ///< floor on an edge's position standard deviation (unmodelled errors: a rocking mount)
-  double min_sigma_rad = 0.0005;   ///< floor on an edge's heading standard deviation
+  double min_sigma_rad = 0.0001;   ///< floor on an edge's heading standard deviation
   int optimise_every_frames = 10;  ///< after a loop closure, optimise at most this often (and once at the end)
   /// Optimise only the last this many poses, the earlier ones held fixed (0: the whole graph every time).
   /// The whole graph is optimised at the end, and when a loop closure corrects the estimate by more than
@@ -370,6 +370,9 @@ void visitConfigFields(Config_& c, Visitor&& v) {
   v("loop_closure", "max_disagreement_per_m", c.loop_closure.max_disagreement_per_m, kNonNegative);
   v("loop_closure", "max_disagreement_rad", c.loop_closure.max_disagreement_rad, kPositive);
   v("loop_closure", "max_disagreement_rad_per_m", c.loop_closure.max_disagreement_rad_per_m, kNonNegative);
+  v("loop_closure", "refine_by_tracked_points", c.loop_closure.refine_by_tracked_points, Range{});
+  v("loop_closure", "tilt_sigma_deg", c.loop_closure.tilt_sigma_deg, kNonNegative);
+  v("loop_closure", "remeasure_at_end", c.loop_closure.remeasure_at_end, Range{});
   v("localization", "cell_m", c.localization.cell_m, Range{0.001, 0.1});
   v("localization", "cell_deg", c.localization.cell_deg, Range{0.5, 45.0});
   v("localization", "max_hamming", c.localization.max_hamming, Range{0, 256});

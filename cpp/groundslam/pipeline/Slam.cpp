@@ -165,7 +165,8 @@ FrameResult Slam::process(PreparedFrame prepared) {
   // §III-C: loop closures through the three gates become graph edges; the graph is optimised (LM). What
   // stays still in the image is not ground: the places and the map get neither artifact cells nor still features.
   const Keyframe ground = groundOf(current, still);
-  closeLoops(ground, result);
+  closeLoops(ground, prepared.tracking, result);
+  keepPlaceTracking(frame, prepared.tracking);
   if (lost_) {
     relocalize(ground, result);
     if (lost_) bridgeLoss(current, prepared.alignment, result);
@@ -217,8 +218,9 @@ Keyframe Slam::groundOf(const Keyframe& current, const std::vector<Match>& still
   Keyframe ground{current.index, current.timestamp,
                   artifact_mask_.withoutArtifacts(still.empty() ? current.features : selectFeatures(current.features, moving)),
                   current.mount};
-  // Places keep the rays only for the mount solved over the run (a loop closure's pair of views is a factor).
-  if (!mountFromLoops()) ground.features.rays.clear();
+  // Places keep the rays only for what fits a loop's pair of views through the frames' mounts: the mount solved over
+  // the run (a loop closure's pair of views is a factor) and the loop measured on its pairs again.
+  if (!mountFromLoops() && !loopsKeepRays()) ground.features.rays.clear();
   if (loop_closer_ && previous_ && !still.empty()) {
     // The previous frame's side of the same matches (its first frame's included, which no match had judged yet).
     std::vector<Eigen::Vector2d> previous_still;
@@ -231,7 +233,10 @@ Keyframe Slam::groundOf(const Keyframe& current, const std::vector<Match>& still
 void Slam::finish() {
   FrameResult ignored;
   optimiseIfDue(ignored, true);
-  if (config_.outdoor.estimate_mount && config_.outdoor.smooth_mount) smoothMount();
+  if (config_.outdoor.estimate_mount && config_.outdoor.smooth_mount) {
+    smoothMount();
+    remeasureLoops();
+  }
 }
 
 void Slam::addToGraph(const OdometryEdge& odometry) {
@@ -364,12 +369,18 @@ LoopCandidate Slam::reported(LoopCandidate candidate) const {
   return candidate;
 }
 
-void Slam::closeLoops(const Keyframe& current, FrameResult& result) {
+void Slam::closeLoops(const Keyframe& current, const TrackingImage& tracking, FrameResult& result) {
   if (!loop_closer_) return;
   StageTimer timer;
-  for (const LoopCandidate& candidate : loop_closer_->process(current.index, segment_, current.features, graph_.poses())) {
+  for (LoopCandidate candidate : loop_closer_->process(current.index, segment_, current.features, graph_.poses())) {
+    std::optional<LoopRays> pairs;
+    if (candidate.accepted()) pairs = measureLoopPairs(candidate, current, tracking);
     report(reported(candidate));
     if (!candidate.accepted()) continue;
+    if (pairs) {
+      pairs->edge = graph_.edges().size();
+      loop_rays_.push_back(std::move(*pairs));
+    }
     graph_.addEdge({candidate.frame_a, candidate.frame_b, candidate.T_a_b,
                     informationFrom(candidate.covariance, config_.graph.min_sigma_m, config_.graph.min_sigma_rad), true});
     if (mountFromLoops()) addLoopMountFactor(candidate, current);

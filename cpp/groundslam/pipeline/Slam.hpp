@@ -3,6 +3,7 @@
 // odometry (§III-B), loop closure (§III-C) and pose-graph optimisation.
 
 #include <deque>
+#include <map>
 #include <functional>
 #include <memory>
 #include <optional>
@@ -216,6 +217,7 @@ class Slam {
   std::vector<Match> mountPairs(const std::vector<Match>& matches, const GroundFeatures& current, const GroundFeatures& reference,
                                 const Pose2& T_reference_current) const;
   MountEstimationSettings mountSettings() const;
+  bool loopsKeepRays() const { return config_.loop_closure.refine_by_tracked_points || config_.loop_closure.remeasure_at_end; }
   bool mountFromLoops() const {
     return config_.outdoor.estimate_mount && config_.outdoor.smooth_mount && config_.outdoor.mount_from_loops;
   }
@@ -260,7 +262,29 @@ class Slam {
   int addUnmeasuredMotion(const OdometryEdge& failed);
   /// While lost: global localization; once it is accepted, the segment joins the map and the graph is optimised.
   void relocalize(const Keyframe& current, FrameResult& result);
-  void closeLoops(const Keyframe& current, FrameResult& result);
+  void closeLoops(const Keyframe& current, const TrackingImage& tracking, FrameResult& result);
+  /// The rays of a loop's pairs (the place's, frame a, and the current frame's, b) and the graph edge they measure.
+  struct LoopRays {
+    size_t edge = 0;
+    int frame_a = 0, frame_b = 0;
+    std::vector<Eigen::Vector2d> a_rays, b_rays;
+  };
+  /// An accepted loop's pairs: its keypoint pairs tracked into the place's image when they track
+  /// (loop_closure.refine_by_tracked_points; the loop then refitted on them), else its keypoints' guided pairs.
+  std::optional<LoopRays> measureLoopPairs(LoopCandidate& loop, const Keyframe& current, const TrackingImage& tracking) const;
+  /// The transform and covariance of a loop's pairs projected through the given mounts; empty when the fit fails.
+  std::optional<std::pair<Pose2, Eigen::Matrix3d>> fitLoopRays(const LoopRays& pairs, const MountState& a_mount, const MountState& b_mount,
+                                                             const Pose2& T_guess) const;
+  /// At the end, once the mounts are smoothed: every loop fitted again through its frames' final mounts, and the
+  /// graph optimised again.
+  void remeasureLoops();
+  /// Keeps the frame's tracking image while it may still become a place, and a place's for good.
+  void keepPlaceTracking(int frame, const TrackingImage& tracking);
+  /// The covariance a pair of views' transform gets from their frames' tilt estimates (loop_closure.tilt_sigma_deg).
+  Eigen::Matrix3d mountCovariance(const Pose2& T_a_b, const GroundFeatures& a_points, const MountState& a_mount,
+                                  const GroundFeatures& b_points, const MountState& b_mount) const;
+  /// The pixel a keypoint's normalised ray came from.
+  std::optional<cv::Point2d> pixelOfRay(const Eigen::Vector2d& ray) const;
   /// With a prior map, every localization.every_frames frames: a loop closure to the prior map's keyframes.
   void closeLoopsOnPriorMap(const Keyframe& current, FrameResult& result);
   /// A candidate as reported: frames of this session count from 0, the prior map's keyframes are negative.
@@ -311,6 +335,9 @@ class Slam {
   std::optional<Keyframe> previous_;
   AlignmentImage previous_alignment_;  ///< the previous image as the alignment uses it (odometry.align_images)
   TrackingImage previous_tracking_;    ///< the previous image as the point tracker uses it (outdoor.track_points)
+  std::map<int, TrackingImage> place_tracking_;  ///< graph frame -> its tracking image, for places and frames still pending
+  std::deque<int> pending_place_tracking_;       ///< frames whose image is kept until it is known whether they became places
+  std::vector<LoopRays> loop_rays_;              ///< every loop closed during the run, for remeasureLoops
   AlignmentImage tracked_alignment_;   ///< the last tracked frame's image, keyframe, graph index and time (bridgeLoss)
   std::optional<Keyframe> tracked_keyframe_;  ///< its features as projected with its mount (bridgeByFeatures)
   int tracked_frame_ = -1;

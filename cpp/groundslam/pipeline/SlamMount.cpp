@@ -108,16 +108,18 @@ double Slam::Spread::keep(double square, double variance, int count) {
   return square_mean > 0.0 ? std::max(0.0, square_mean - variance_mean) / square_mean : 0.0;
 }
 
+std::optional<cv::Point2d> Slam::pixelOfRay(const Eigen::Vector2d& ray) const {
+  // The ray seen through the calibrated mount: the pixel it came from.
+  const auto ground = CameraModel::intersectGround(ray, camera_.T_robot_camera());
+  const auto pixel = ground ? camera_.groundToPixel(*ground) : std::nullopt;
+  if (!pixel) return std::nullopt;
+  return cv::Point2d(pixel->x(), pixel->y());
+}
+
 std::optional<MountObservation> Slam::trackedObservation(const Keyframe& previous, const Keyframe& current, const std::vector<Match>& pairs,
                                                         const Pose2& T_previous_current, const TrackingImage& tracking) const {
   if (tracking.pixels.empty() || previous_tracking_.pixels.empty() || pairs.size() < 4) return std::nullopt;
-  // The keypoints' pixels (their rays seen through the calibrated mount), and the warp their matches make.
-  const auto pixelOf = [&](const Eigen::Vector2d& ray) -> std::optional<cv::Point2d> {
-    const auto ground = CameraModel::intersectGround(ray, camera_.T_robot_camera());
-    const auto pixel = ground ? camera_.groundToPixel(*ground) : std::nullopt;
-    if (!pixel) return std::nullopt;
-    return cv::Point2d(pixel->x(), pixel->y());
-  };
+  // The keypoints' pixels, and the warp their matches make.
   std::vector<cv::Point2d> current_px, previous_px;
   std::vector<Match> kept;
   // No more points than the estimate takes (outdoor.max_pairs), spread over the pairs as it would spread them.
@@ -125,8 +127,8 @@ std::optional<MountObservation> Slam::trackedObservation(const Keyframe& previou
                       static_cast<size_t>(std::max(1, config_.outdoor.max_pairs));
   for (size_t i = 0; i < pairs.size(); i += std::max<size_t>(1, step)) {
     const Match& m = pairs[i];
-    const auto c = pixelOf(current.features.rays[static_cast<size_t>(m.query)]);
-    const auto p = pixelOf(previous.features.rays[static_cast<size_t>(m.train)]);
+    const auto c = pixelOfRay(current.features.rays[static_cast<size_t>(m.query)]);
+    const auto p = pixelOfRay(previous.features.rays[static_cast<size_t>(m.train)]);
     if (!c || !p) continue;
     current_px.push_back(*c);
     previous_px.push_back(*p);
