@@ -4,9 +4,9 @@
 // measured again.
 #include <algorithm>
 #include <cmath>
-#include <vector>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 

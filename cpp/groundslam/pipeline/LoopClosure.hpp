@@ -56,7 +56,7 @@ struct LoopClosureSettings {
   double max_disagreement_rad_per_m = 0.01;
   /// Not in the paper: an accepted loop's keypoint pairs are tracked into the place's image (Lucas-Kanade, as for
   /// the mount's points, core/PointTracking.hpp) and the transform refitted on the tracked points. ORB keypoints
-  /// scatter by most of a pixel; tracked ones by a few hundredths, and a loop's heading was off by 0.1-0.4 degrees.
+  /// scatter by most of a pixel, tracked ones by a few hundredths; a loop's heading was off by 0.05-0.4 degrees.
   bool refine_by_tracked_points = true;
   /// How far a frame's estimated tilt is off (degrees, each of roll and pitch): its effect on a refined loop's
   /// transform, which the tracked points' own residuals do not show, is added to the loop's covariance.
