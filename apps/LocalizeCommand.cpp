@@ -105,6 +105,9 @@ void localize(const LocalizeOptions& o) {
   installStopHandlers();
   writeNewFile(folder.path("config.yaml"), configToYaml(settings));
   const FramePreparer preparer(config);
+  // Each image on its own: no odometry shows whether the floor repeats, so the votes are always compared.
+  LocalizationSettings localization = config.localization;
+  localization.unrepeated_max_vote_ratio = localization.max_vote_ratio;
   std::vector<Localized> rows;
   Trajectory localized;
   Progress progress("localize", static_cast<int>(dataset.frames.size()));
@@ -114,7 +117,7 @@ void localize(const LocalizeOptions& o) {
                                                             config.camera.image_height, preparer.decoderReduction());
     const PreparedFrame prepared = preparer.prepare(decoded.image, frame.timestamp, decoded.reduced_by);
     const auto start = std::chrono::steady_clock::now();
-    const Localization l = localizeGlobally(map, prepared.features, config.localization, config.odometry);
+    const Localization l = localizeGlobally(map, prepared.features, localization, config.odometry);
     const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
     rows.push_back({static_cast<int>(i), frame.timestamp, l, ms});
     if (l.ok()) localized.push_back({frame.timestamp, l.T_map_robot});

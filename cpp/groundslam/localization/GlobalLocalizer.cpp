@@ -184,6 +184,13 @@ std::optional<Verified> verifyPeak(const FeatureMap& map, const GroundFeatures& 
   return verified;
 }
 
+/// The most votes another peak may have, as a share of the winner's. A floor shows that it repeats when a rival pose
+/// verifies with min_inliers inliers: there every repetition collects votes, and those not verified are judged by
+/// them. Elsewhere a weak winner's dozen votes are matched by chance peaks, which its verified inliers outweigh.
+double voteRatioFor(int rival_inliers, const LocalizationSettings& s) {
+  return rival_inliers >= s.min_inliers ? s.max_vote_ratio : std::max(s.max_vote_ratio, s.unrepeated_max_vote_ratio);
+}
+
 }  // namespace
 
 const char* localizationStatusName(LocalizationStatus status) {
@@ -240,7 +247,7 @@ Localization localizeGlobally(const FeatureMap& map, const GroundFeatures& query
   if (result.inliers < s.min_inliers) {
     result.status = LocalizationStatus::too_few_inliers;
   } else if (static_cast<double>(rival) > s.max_rival_ratio * static_cast<double>(result.inliers) ||
-             static_cast<double>(rival_votes) > s.max_vote_ratio * static_cast<double>(result.votes)) {
+             static_cast<double>(rival_votes) > voteRatioFor(rival, s) * static_cast<double>(result.votes)) {
     result.status = LocalizationStatus::ambiguous;
   } else if (best.fit.covarianceScore() > s.max_covariance_score) {
     result.status = LocalizationStatus::covariance;

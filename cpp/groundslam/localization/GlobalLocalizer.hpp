@@ -28,6 +28,10 @@ struct LocalizationSettings {
   int min_votes = 8;                 ///< a peak with fewer votes is not verified
   double max_rival_ratio = 0.5;      ///< inliers of the best rival pose / the winner's, at most
   double max_vote_ratio = 0.7;       ///< votes of the strongest other peak / the winner's, at most
+  /// The same where the floor shows no repetition: no rival pose verified with min_inliers inliers (and, in a run,
+  /// odometry never met a rival repetition). There a weak winner's dozen votes are matched by chance peaks, while
+  /// its verified inliers still decide (1 = votes not compared).
+  double unrepeated_max_vote_ratio = 1.0;
   int min_inliers = 30;              ///< after guided re-matching
   double max_covariance_score = -4.0;  ///< log10 of the largest eigenvalue of the fit's covariance
   double min_spread = 0.25;          ///< inliers must span this fraction of the query features' extent (both axes)

@@ -381,6 +381,7 @@ void visitConfigFields(Config_& c, Visitor&& v) {
   v("localization", "min_votes", c.localization.min_votes, Range{1, 1e9});
   v("localization", "max_rival_ratio", c.localization.max_rival_ratio, Range{0.0, 1.0});
   v("localization", "max_vote_ratio", c.localization.max_vote_ratio, Range{0.0, 1.0});
+  v("localization", "unrepeated_max_vote_ratio", c.localization.unrepeated_max_vote_ratio, Range{0.0, 1.0});
   v("localization", "min_inliers", c.localization.min_inliers, Range{3, 1e9});
   v("localization", "max_covariance_score", c.localization.max_covariance_score, Range{-30.0, 30.0});
   v("localization", "min_spread", c.localization.min_spread, Range{0.0, 1.0});

@@ -273,7 +273,7 @@ std::optional<LoopCandidate> LoopCloser::localizeOnPriorMap(int frame, const Gro
                                                             const std::vector<Pose2>& estimates, int prior_frames) {
   AnchorFilter usable(feature_map_.anchors().size());
   for (size_t a = 0; a < usable.size(); ++a) usable[a] = feature_map_.anchors()[a].frame < prior_frames;
-  const Localization localization = localizeGlobally(feature_map_, features, localization_, fitting_, usable);
+  const Localization localization = localizeOnMap(features, usable);
   if (!localization.ok() || onAnAnchorsPose(localization)) return std::nullopt;
   const size_t f = static_cast<size_t>(frame);
   const double d = recent_loops_.empty() ? path_length_m_[f] - path_length_m_[static_cast<size_t>(prior_frames)]
@@ -289,6 +289,12 @@ std::optional<LoopCandidate> LoopCloser::localizeOnPriorMap(int frame, const Gro
   return candidate;
 }
 
+Localization LoopCloser::localizeOnMap(const GroundFeatures& features, const AnchorFilter& usable) const {
+  LocalizationSettings settings = localization_;
+  if (floor_repeats_) settings.unrepeated_max_vote_ratio = settings.max_vote_ratio;
+  return localizeGlobally(feature_map_, features, settings, fitting_, usable);
+}
+
 bool LoopCloser::onAnAnchorsPose(const Localization& localization) const {
   return localization.T_anchor_robot.translation().norm() < localization_.min_anchor_offset_m &&
          std::abs(localization.T_anchor_robot.theta) < localization_.min_anchor_offset_rad;
@@ -298,7 +304,7 @@ std::vector<LoopCandidate> LoopCloser::relocalize(int frame, const GroundFeature
   const int lost_segment = segmentOf(frame);
   AnchorFilter usable(feature_map_.anchors().size());
   for (size_t a = 0; a < usable.size(); ++a) usable[a] = feature_map_.anchors()[a].segment == kMapSegment;
-  const Localization localization = localizeGlobally(feature_map_, features, localization_, fitting_, usable);
+  const Localization localization = localizeOnMap(features, usable);
   if (!localization.ok() || onAnAnchorsPose(localization)) return {};
   // One localization could be a lookalike; the next must agree with what odometry measured in between.
   const PendingLocalization current{frame, localization};
@@ -335,7 +341,7 @@ std::vector<LoopCandidate> LoopCloser::joinOrphanSegments(const std::vector<Pose
       const int anchor = members[k * (members.size() - 1) / (tried - 1)];
       const int frame = anchors[static_cast<size_t>(anchor)].frame;
       const Localization localization =
-          localizeGlobally(feature_map_, feature_map_.featuresInAnchorFrame(anchor), localization_, fitting_, usable);
+          localizeOnMap(feature_map_.featuresInAnchorFrame(anchor), usable);
       if (!localization.ok() || onAnAnchorsPose(localization)) continue;
       const PendingLocalization current{frame, localization};
       const auto agreeing = std::find_if(found.begin(), found.end(), [&](const PendingLocalization& earlier) {

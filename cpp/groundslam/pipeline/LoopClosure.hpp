@@ -108,6 +108,9 @@ class LoopCloser {
   /// Segment `from` joins segment `to` (a relocalization, or a bridge over the loss): its frames and map keyframes
   /// belong to `to` from now on.
   void joinSegments(int from, int to);
+  /// The run's odometry met a rival repetition: from now on the floor is taken to repeat, and global localization
+  /// compares the winner's votes with its rivals' (LocalizationSettings::max_vote_ratio, not unrepeated_max_vote_ratio).
+  void floorRepeats() { floor_repeats_ = true; }
   /// Tracking was lost after the last frame processed: the frames still waiting their k frames become places
   /// and map keyframes at once. The delay keeps neighbours from closing loops, and across a loss there are no
   /// neighbours (candidates never cross segments); relocalization can then find the ground seen just before,
@@ -167,6 +170,8 @@ class LoopCloser {
   bool agreeWithOdometry(const PendingLocalization& a, const PendingLocalization& b, const std::vector<Pose2>& estimates) const;
   /// A localization on a map keyframe's own pose (LocalizationSettings::min_anchor_offset_*): camera artifacts.
   bool onAnAnchorsPose(const Localization& localization) const;
+  /// A global localization on the usable map keyframes, with the vote rule of the floor seen so far.
+  Localization localizeOnMap(const GroundFeatures& features, const AnchorFilter& usable) const;
 
   LoopClosureSettings settings_;
   LocalizationSettings localization_;
@@ -174,6 +179,7 @@ class LoopCloser {
   FeatureMap feature_map_;
   std::vector<int> segment_of_frame_;
   std::optional<PendingLocalization> pending_localization_;
+  bool floor_repeats_ = false;
   double matching_ratio_;
   FitSettings fitting_;
   PlaceMap places_;

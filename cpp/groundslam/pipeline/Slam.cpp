@@ -504,7 +504,10 @@ OdometryEdge Slam::estimateOdometry(const Keyframe& previous, const Keyframe& cu
   // Not in the paper: on a floor that repeats (this fit or one of the last kRepeatedFloorFrames had a rival), a
   // motion unlike the robot's steps, or one a rival repetition is nearer to, is judged by them below: after a
   // gap two frames long the matches say the robot stepped back by a tile minus three steps, without a rival.
-  if (!fit.rivals.empty()) last_rival_frame_ = current.index;
+  if (!fit.rivals.empty()) {
+    last_rival_frame_ = current.index;
+    loop_closer_->floorRepeats();
+  }
   const bool repeated_floor = repeatedFloor(current.index);
   if (fit.ok() && repeated_floor && doubtedByTheSteps(fit, previous, current)) fit.status = FitStatus::implausible_motion;
   // Not in the paper: refused for its rivals or its speed on a repeated floor, the fit and its rivals are
