@@ -37,6 +37,23 @@ sim::SimulationSettings session(const std::string& texture, sim::PathKind path, 
   return s;
 }
 
+/// A 400-frame carpet loop under the outdoor look: a shadow turning with the heading, lens dirt, glare, a bumper,
+/// a rocking and bouncing mount, motion and defocus blur, noise, exposure changes, vignetting, wet from 60%.
+sim::SimulationSettings carpetLoopUnderTheOutdoorLook(std::uint64_t seed) {
+  sim::SimulationSettings s;
+  s.texture_kind = "carpet";
+  s.path.kind = sim::PathKind::loop;
+  s.path.frames = 400;
+  s.path.seed = s.seed = seed;
+  s.mount_jitter_deg = 0.5;
+  s.height_jitter_m = 0.002;
+  s.motion_blur = 0.3;
+  s.wet_after = 0.6;
+  s.photometry = {2.0, 0.6, 0.15, 0.2};
+  s.artifacts = {0.6, 6, 0.8, 0.15};
+  return s;
+}
+
 Config configFor(const sim::SimulationSettings& s) {
   Config c;
   c.camera = cameraConfigOf(s.camera, s.mounting_height_m);
@@ -377,17 +394,7 @@ TEST(Relocalization, AQuarterTurnLostOnCarpetUnderTheOutdoorLookIsFoundBySearchi
   // and the frame is lost. Searching the turns every 5 degrees after one usual step finds it at frames 39 and 40
   // alike (carried by odometry), so frame 40 joins the map and frame 39 falls into place with it. With the search off the robot stays lost a quarter
   // turn off.
-  sim::SimulationSettings s;
-  s.texture_kind = "carpet";
-  s.path.kind = sim::PathKind::loop;
-  s.path.frames = 400;
-  s.path.seed = s.seed = 23;
-  s.mount_jitter_deg = 0.5;
-  s.height_jitter_m = 0.002;
-  s.motion_blur = 0.3;
-  s.wet_after = 0.6;
-  s.photometry = {2.0, 0.6, 0.15, 0.2};
-  s.artifacts = {0.6, 6, 0.8, 0.15};
+  sim::SimulationSettings s = carpetLoopUnderTheOutdoorLook(23);
   s.motion.spin_every = 80;
   const sim::SequenceSimulator simulator(s);
   const auto image = [](int position) { return position < 3 ? position : position + 1; };  // frame 3 dropped
@@ -626,17 +633,7 @@ TEST(Relocalization, OnAFloorThatDoesNotRepeatAWeakWinnersVotesAreNotComparedWit
   // only the winner verifies. Odometry never met a rival repetition, so the votes are not compared
   // (localization.unrepeated_max_vote_ratio 1): the robot relocalizes at frame 332; comparing them (0.7, the rule
   // on a repeated floor) it stays lost until 334.
-  sim::SimulationSettings s;
-  s.texture_kind = "carpet";
-  s.path.kind = sim::PathKind::loop;
-  s.path.frames = 400;
-  s.path.seed = s.seed = 41;
-  s.mount_jitter_deg = 0.5;
-  s.height_jitter_m = 0.002;
-  s.motion_blur = 0.3;
-  s.wet_after = 0.6;
-  s.photometry = {2.0, 0.6, 0.15, 0.2};
-  s.artifacts = {0.6, 6, 0.8, 0.15};
+  const sim::SimulationSettings s = carpetLoopUnderTheOutdoorLook(41);
   const sim::SequenceSimulator simulator(s);
   const auto run = [&](double unrepeated_max_vote_ratio, int& relocalized_at) {
     Config config = configFor(s);
