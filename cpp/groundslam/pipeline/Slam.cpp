@@ -92,7 +92,7 @@ FrameResult Slam::process(PreparedFrame prepared) {
     // Not where something stays still in the image: the robot's shadow, glare, dirt or bumper pull the images'
     // alignment toward rest (measured outdoors: 1-5% of the turns lost where the keypoints are too weak to tell).
     // The label judges the keypoints' fit: the images refine its heading, not its position.
-    const bool vouched = vouchedFor(odometry);
+    const bool vouched = vouchedFor(odometry, current);
     if (!odometry.fallback && !odometry.aligned && !odometry.low_overlap && !artifacts_seen) {
       StageTimer timer;
       refineHeadingByImages(odometry, current, prepared.alignment);
@@ -143,6 +143,7 @@ FrameResult Slam::process(PreparedFrame prepared) {
                     : !vouched ? FrameStatus::uncertain
                                           : FrameStatus::ok;
     if (odometry.fallback) result.fallback_reason = odometry.fit_status;
+    if (!odometry.fallback && !odometry.used.empty() && !atRest(odometry.T_prev_curr, odometry.used, current)) seen_moving_ = true;
     tied_to_previous = !odometry.fallback;
     measured_.push_back((!odometry.fallback && !lost_) || map_start_ == frame);
   } else if (prior_frames_ > 0) {
@@ -698,7 +699,11 @@ bool Slam::spansGap(double steps) const {
   return min_steps > 0.0 && steps >= min_steps;  // a lost frame's infinite steps too
 }
 
-bool Slam::vouchedFor(const OdometryEdge& odometry) const {
+bool Slam::vouchedFor(const OdometryEdge& odometry, const Keyframe& current) const {
+  // Before the robot was seen moving, nothing has shown what stays still in the image: on a faint floor the robot's
+  // own artifacts can outnumber the ground's keypoints and lock the fit at rest while it drives (docs/accuracy.md,
+  // Session 28). A robot that really stands still at the start says `uncertain` until it moves.
+  if (!seen_moving_ && !odometry.used.empty() && atRest(odometry.T_prev_curr, odometry.used, current)) return false;
   const OdometryChecks& checks = config_.odometry_checks;
   return checks.ok_sigmas <= 0.0 ||
          withinAtSigmas(odometry.covariance, checks.ok_sigmas, checks.ok_within_m, checks.ok_within_deg * M_PI / 180.0);

@@ -235,8 +235,11 @@ class Slam {
   /// the median of the last good ones', whichever is more (at least 1; a failed motion: infinite). Frames dropped
   /// without a trace in the timestamps still show in the length; the mount rocked over all of them.
   double rockingSteps(const OdometryEdge& odometry, double previous_time, double current_time) const;
-  /// The fit's own covariance keeps its motion within the `ok` tolerance (OdometryChecks::ok_sigmas).
-  bool vouchedFor(const OdometryEdge& odometry) const;
+  /// The fit's own covariance keeps its motion within the `ok` tolerance (OdometryChecks::ok_sigmas), and a fit at rest
+  /// comes after the robot was seen moving (seen_moving_).
+  bool vouchedFor(const OdometryEdge& odometry, const Keyframe& current) const;
+  /// Every match the fit used stays where it was in the image (within movedDistanceM on the ground).
+  bool atRest(const Pose2& fitted, const std::vector<Match>& used, const Keyframe& current) const;
   /// How far a fit must move a still match on the ground for the robot to have moved (outdoor.moved_factor still
   /// radii): less, and the match may be ground at rest as well as the robot's own artifact.
   double movedDistanceM() const { return config_.outdoor.moved_factor * config_.outdoor.still_radius_px * ground_sample_m_; }
@@ -349,6 +352,9 @@ class Slam {
   ImageAlignmentSettings alignment_settings_;
   PointTrackingSettings point_tracking_;  ///< outdoor.track_points
   std::optional<OdometryEdge> last_good_odometry_;
+  /// Some odometry fit of this run moved its matches (not atRest). Until then a fit at rest cannot be told from the
+  /// robot's own shadow edge, lens dirt and bumper, which stay still whether or not it moves: such a fit is not `ok`.
+  bool seen_moving_ = false;
   /// The time between the two frames of last_good_odometry_; 0 after a failed frame (no speed to judge by).
   double last_good_odometry_seconds_ = 0.0;
   static constexpr size_t kRecentSteps = 5;

@@ -134,6 +134,13 @@ OdometryEdge Slam::alignedEdge(const Pose2& T_prev_curr) const {
   return edge;
 }
 
+bool Slam::atRest(const Pose2& fitted, const std::vector<Match>& used, const Keyframe& current) const {
+  return std::all_of(used.begin(), used.end(), [&](const Match& m) {
+    const Eigen::Vector2d& p = current.features.points[static_cast<size_t>(m.query)];
+    return (fitted * p - p).norm() < movedDistanceM();
+  });
+}
+
 Slam::FitCheck Slam::checkedByAlignment(const Pose2& fitted, int inliers, const std::vector<Match>& used, const Keyframe& previous,
                                         const Keyframe& current, const AlignmentImage& alignment, bool repeated_floor) const {
   const OdometryChecks& checks = config_.odometry_checks;
@@ -146,11 +153,7 @@ Slam::FitCheck Slam::checkedByAlignment(const Pose2& fitted, int inliers, const 
   // A fit that leaves every match where it was cannot be confirmed by the images: the alignment's mask leaves out
   // what stays still where the fit moves the ground, and at rest nothing does, so the robot's own shadow edge,
   // lens dirt and bumper, which stay still whether or not it moved, pull the alignment to rest as well.
-  const bool at_rest = std::all_of(used.begin(), used.end(), [&](const Match& m) {
-    const Eigen::Vector2d& p = current.features.points[static_cast<size_t>(m.query)];
-    return (fitted * p - p).norm() < movedDistanceM();
-  });
-  if (at_rest) return check;
+  if (atRest(fitted, used, current)) return check;
   const ImageAlignment aligned = alignImages(previous_alignment_, alignment, {imageWarpOf(fitted)}, alignment_settings_);
   if (!believable(aligned)) return check;
   const Pose2 T_prev_curr = groundMotionOf(aligned.W_previous_current);
