@@ -5,6 +5,7 @@
 #include <cmath>
 #include <random>
 #include <utility>
+#include <vector>
 
 #include <gtest/gtest.h>
 #include <opencv2/imgproc.hpp>
@@ -404,6 +405,33 @@ TEST(ImageAlignment, OnASmoothFloorTrackingLostAtABlankFrameIsBridgedToTheLastTr
   EXPECT_LT(unbroken.ate_m, 0.012);
 }
 
+namespace {
+
+/// Odometry alone (no loop closure) over a faint smooth floor (blobs `blur_px` texture pixels wide at a tenth of the
+/// contrast) under the outdoor look, the robot driving a 40-frame lawnmower lane at 1 cm per frame: every frame's result.
+std::vector<FrameResult> faintFloorRun(double blur_px) {
+  sim::SimulationSettings s;
+  s.path.kind = sim::PathKind::lawnmower;
+  s.path.frames = 40;
+  s.path.laps = 1;
+  s.photometry.noise_sigma = 2.0;
+  s.user_texture_width_m = 0.6;
+  s.seed = 5;
+  s.artifacts = {0.6, 6, 0.8, 0.15};
+  cv::Mat floor;
+  smoothTexture(512, blur_px, 5).convertTo(floor, CV_8U, 0.1, 128.0 * 0.9);
+  const sim::SequenceSimulator simulator(s, floor);
+  Config config;
+  config.camera = cameraConfigOf(s.camera, s.mounting_height_m);
+  config.loop_closure.enabled = false;
+  Slam slam(config, nullptr);
+  std::vector<FrameResult> results;
+  for (int i = 0; i < simulator.frameCount(); ++i) results.push_back(slam.process(simulator.renderFrame(i), i));
+  return results;
+}
+
+}  // namespace
+
 TEST(ImageAlignment, AFitAtRestOnAFloorTheRobotsArtifactsOutnumberIsNotConfirmedByTheImages) {
   // A faint smooth floor (blobs 1.2 and 1.4 cm wide at a tenth of the contrast) under the outdoor look, the robot
   // driving 1 cm per frame: the shadow edge, lens dirt and bumper outnumber the ground's keypoints, fits say the
@@ -414,24 +442,8 @@ TEST(ImageAlignment, AFitAtRestOnAFloorTheRobotsArtifactsOutnumberIsNotConfirmed
   // Sessions 17 and 28.)
   int weak_rest = 0, weak_rest_ok = 0, weak_rest_unconfirmed = 0;
   for (const double blur : {10.0, 12.0}) {
-    sim::SimulationSettings s;
-    s.path.kind = sim::PathKind::lawnmower;
-    s.path.frames = 40;
-    s.path.laps = 1;
-    s.photometry.noise_sigma = 2.0;
-    s.user_texture_width_m = 0.6;
-    s.seed = 5;
-    s.artifacts = {0.6, 6, 0.8, 0.15};
-    cv::Mat floor;
-    smoothTexture(512, blur, 5).convertTo(floor, CV_8U, 0.1, 128.0 * 0.9);
-    const sim::SequenceSimulator simulator(s, floor);
-    Config config;
-    config.camera = cameraConfigOf(s.camera, s.mounting_height_m);
-    config.loop_closure.enabled = false;
-    Slam slam(config, nullptr);
-    for (int i = 0; i < simulator.frameCount(); ++i) {
-      const FrameResult r = slam.process(simulator.renderFrame(i), i);
-      if (i == 0 || r.odometry.translation().norm() > 0.001 || r.inliers >= 30 || !measuredByOdometry(r.status)) continue;
+    for (const FrameResult& r : faintFloorRun(blur)) {
+      if (r.index == 0 || r.odometry.translation().norm() > 0.001 || r.inliers >= 30 || !measuredByOdometry(r.status)) continue;
       ++weak_rest;  // the robot drove 1 cm
       weak_rest_ok += r.status == FrameStatus::ok ? 1 : 0;
       weak_rest_unconfirmed += r.status == FrameStatus::unconfirmed ? 1 : 0;
@@ -448,25 +460,9 @@ TEST(ImageAlignment, OnAFaintFloorAFitAtRestIsNotOkBeforeTheRobotWasSeenMoving) 
   // still in the image. Until some fit moved its matches, a fit at rest is not `ok`.
   int rest_before_moving = 0, rest_before_moving_ok = 0, strong = 0;
   for (const double blur : {6.0, 8.0, 10.0}) {
-    sim::SimulationSettings s;
-    s.path.kind = sim::PathKind::lawnmower;
-    s.path.frames = 40;
-    s.path.laps = 1;
-    s.photometry.noise_sigma = 2.0;
-    s.user_texture_width_m = 0.6;
-    s.seed = 5;
-    s.artifacts = {0.6, 6, 0.8, 0.15};
-    cv::Mat floor;
-    smoothTexture(512, blur, 5).convertTo(floor, CV_8U, 0.1, 128.0 * 0.9);
-    const sim::SequenceSimulator simulator(s, floor);
-    Config config;
-    config.camera = cameraConfigOf(s.camera, s.mounting_height_m);
-    config.loop_closure.enabled = false;
-    Slam slam(config, nullptr);
     bool moved = false;
-    for (int i = 0; i < simulator.frameCount(); ++i) {
-      const FrameResult r = slam.process(simulator.renderFrame(i), i);
-      if (i == 0 || !measuredByOdometry(r.status)) continue;
+    for (const FrameResult& r : faintFloorRun(blur)) {
+      if (r.index == 0 || !measuredByOdometry(r.status)) continue;
       const bool at_rest = r.odometry.translation().norm() < 0.001;  // the robot drove 1 cm
       if (!at_rest) moved = true;
       if (at_rest && !moved) {

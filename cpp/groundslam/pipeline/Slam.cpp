@@ -507,7 +507,7 @@ OdometryEdge Slam::estimateOdometry(const Keyframe& previous, const Keyframe& cu
   // gap two frames long the matches say the robot stepped back by a tile minus three steps, without a rival.
   if (!fit.rivals.empty()) {
     last_rival_frame_ = current.index;
-    loop_closer_->floorRepeats();
+    if (loop_closer_) loop_closer_->floorRepeats();  // without loop closure there is no global localization to tell
   }
   const bool repeated_floor = repeatedFloor(current.index);
   if (fit.ok() && repeated_floor && doubtedByTheSteps(fit, previous, current)) fit.status = FitStatus::implausible_motion;
