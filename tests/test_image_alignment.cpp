@@ -183,6 +183,66 @@ TEST(ImageAlignment, ATurnOnTheSpotIsFoundByItsCorrelationAndThenAligned) {
   EXPECT_GE(turnCandidates(alignmentImage(symmetric_previous, settings), alignmentImage(symmetric_current, settings), centre, 5.0, 0.1).size(), 2u);
 }
 
+namespace {
+
+/// The root mean square of an alignment image over the pixels of `mask` (reduced pixels).
+double contrastOver(const AlignmentImage& image, const cv::Mat& mask) {
+  cv::Scalar mean, deviation;
+  cv::meanStdDev(image.pixels, mean, deviation, mask);
+  return std::hypot(mean[0], deviation[0]);
+}
+
+}  // namespace
+
+TEST(ImageAlignment, ContrastNormalisedTheGroundInTheShadowCountsAsMuchAsInTheLight) {
+  const cv::Matx23d truth = rigidWarp(-2.0 * kDeg, 16.0, 5.0);
+  const auto [previous, current] = twoViews(truth, true);  // the shadow keeps 35% of the light
+  ImageAlignmentSettings plain, normalised;
+  plain.highpass_fraction = normalised.highpass_fraction = 0.02;
+  normalised.normalise_contrast = true;
+  // Reduced pixels (160 x 120) well inside the shadow (x / 125 + y / 95 < 1, halved) and well in the light.
+  cv::Mat shadowed = cv::Mat::zeros(120, 160, CV_8U), lit = shadowed.clone();
+  cv::rectangle(shadowed, cv::Rect(5, 5, 30, 25), 255, cv::FILLED);
+  cv::rectangle(lit, cv::Rect(110, 70, 40, 40), 255, cv::FILLED);
+  const AlignmentImage p_plain = alignmentImage(previous, plain), p_normalised = alignmentImage(previous, normalised);
+  EXPECT_LT(contrastOver(p_plain, shadowed), 0.5 * contrastOver(p_plain, lit));  // measured: 0.35 of it
+  const double ratio = contrastOver(p_normalised, shadowed) / contrastOver(p_normalised, lit);
+  EXPECT_GT(ratio, 0.8);
+  EXPECT_LT(ratio, 1.25);
+  const ImageAlignment aligned = alignImages(p_normalised, alignmentImage(current, normalised), {rigidWarp(-1.0 * kDeg, 13.0, 2.0)}, normalised);
+  ASSERT_TRUE(aligned.converged);
+  EXPECT_LT(cornerError(aligned.W_previous_current, truth), 0.5);
+  EXPECT_EQ(aligned.rival_correlation, -1.0);  // one start: no rival
+}
+
+TEST(ImageAlignment, OnAFloorThatRepeatsAStartOneRepetitionOverEndsThereAsWellExplained) {
+  // Tiles 48 pixels wide of one pattern: starts one step (12 pixels) and one tile further each find a repetition.
+  const cv::Mat tile = smoothTexture(48, 2.0, 11);
+  cv::Mat floor;
+  cv::repeat(tile, 10, 10, floor);
+  const auto views = [&](const cv::Mat& ground, const cv::Matx23d& W) {
+    cv::Matx23d W_floor = W;
+    W_floor(0, 2) += 80.0;
+    W_floor(1, 2) += 120.0;
+    cv::Mat current;
+    cv::warpAffine(ground, current, W_floor, cv::Size(320, 240), cv::INTER_LINEAR | cv::WARP_INVERSE_MAP);
+    return std::make_pair(ground(cv::Rect(80, 120, 320, 240)).clone(), current);
+  };
+  const cv::Matx23d truth = rigidWarp(0.0, 13.0, 1.0);
+  const std::vector<cv::Matx23d> starts{rigidWarp(0.0, 12.0, 0.0), rigidWarp(0.0, 12.0 + 48.0, 0.0)};
+  const ImageAlignmentSettings settings;
+  const auto [previous, current] = views(floor, truth);
+  const ImageAlignment repeated = alignImages(alignmentImage(previous, settings), alignmentImage(current, settings), starts, settings);
+  ASSERT_TRUE(repeated.converged);
+  EXPECT_GT(repeated.rival_correlation, repeated.correlation - 0.05);
+  // A floor that does not repeat: the far start ends elsewhere, far less well explained, or at the same place.
+  const auto [p, c] = views(smoothTexture(600, 2.0, 11), truth);
+  const ImageAlignment unique = alignImages(alignmentImage(p, settings), alignmentImage(c, settings), starts, settings);
+  ASSERT_TRUE(unique.converged);
+  EXPECT_LT(cornerError(unique.W_previous_current, truth), 0.5);
+  EXPECT_LT(unique.rival_correlation, 0.5 * unique.correlation);
+}
+
 TEST(ImageAlignment, WarpsConvertBetweenOriginalAndReducedPixelsExactly) {
   const cv::Matx23d W = rigidWarp(0.3, 12.5, -7.25);
   const cv::Matx23d back = toOriginalPixels(toReducedPixels(W, 4.0), 4.0);

@@ -76,10 +76,19 @@ cv::Matx23d toOriginalPixels(const cv::Matx23d& W_reduced, double scale) {
 AlignmentImage alignmentImage(const cv::Mat& gray, const ImageAlignmentSettings& settings, int reduced_by) {
   AlignmentImage aligned;
   const ReducedImage reduced = reduceByWholeFactor(gray, settings.width_px);
+  const double blur_px = std::max(1.0, settings.highpass_fraction * reduced.pixels.cols);
   cv::Mat background;
-  cv::GaussianBlur(reduced.pixels, background, cv::Size(0, 0), std::max(1.0, settings.highpass_fraction * reduced.pixels.cols), 0.0,
-                   cv::BORDER_REFLECT);
+  cv::GaussianBlur(reduced.pixels, background, cv::Size(0, 0), blur_px, 0.0, cv::BORDER_REFLECT);
   aligned.pixels = reduced.pixels - background;
+  if (settings.normalise_contrast) {
+    // Divided by the local contrast (a floor of two grey levels' contrast and sensor noise is not lifted above it),
+    // scaled to stay in grey levels of a well-lit floor (the still test's texture threshold is in those).
+    constexpr double kMinContrast = 2.0, kGreyLevels = 20.0;
+    cv::Mat contrast;
+    cv::GaussianBlur(aligned.pixels.mul(aligned.pixels), contrast, cv::Size(0, 0), blur_px, 0.0, cv::BORDER_REFLECT);
+    cv::sqrt(contrast + kMinContrast * kMinContrast, contrast);
+    aligned.pixels = kGreyLevels * aligned.pixels / contrast;
+  }
   aligned.scale = static_cast<double>(reduced.factor) * std::max(1, reduced_by);
   return aligned;
 }
@@ -175,16 +184,22 @@ ImageAlignment alignImages(const AlignmentImage& previous, const AlignmentImage&
   const cv::Mat& current_ground = ground.current;
   const cv::Mat& moving = ground.moving;
 
-  std::optional<cv::Matx23d> best_reduced;
+  std::vector<std::pair<cv::Matx23d, double>> solutions;
   for (const cv::Matx23d& start : starts) {
-    const auto solution = eccFrom(previous_ground, current_ground, moving, toReducedPixels(start, previous.scale), settings.max_iterations);
-    if (solution && (!best_reduced || solution->second > best.correlation)) {
-      best_reduced = solution->first;
-      best.correlation = solution->second;
+    if (auto solution = eccFrom(previous_ground, current_ground, moving, toReducedPixels(start, previous.scale), settings.max_iterations)) {
+      solutions.push_back(*solution);
     }
   }
-  if (!best_reduced) return best;
+  if (solutions.empty()) return best;
+  const auto winner = std::max_element(solutions.begin(), solutions.end(), [](const auto& a, const auto& b) { return a.second < b.second; });
+  const std::optional<cv::Matx23d> best_reduced = winner->first;
+  best.correlation = winner->second;
   best.converged = true;
+  for (const auto& [warp, correlation] : solutions) {
+    if (warpDistance(warp, *best_reduced, previous.pixels.size()) > settings.probe_px) {
+      best.rival_correlation = std::max(best.rival_correlation, correlation);
+    }
+  }
   // ECC's correlation at rest, over the pixels the alignment used.
   best.rest_correlation = maskedCorrelation(previous_ground, current_ground, moving, 0.0);
   best.W_previous_current = toOriginalPixels(*best_reduced, previous.scale);

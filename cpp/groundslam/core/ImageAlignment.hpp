@@ -14,6 +14,9 @@ namespace groundslam {
 struct ImageAlignmentSettings {
   int width_px = 160;               ///< images are reduced by a whole factor to this width or less before aligning
   double highpass_fraction = 0.08;  ///< background light removed: a Gaussian blur this share of the reduced width
+  /// Each pixel then divided by the contrast around it (the root mean square over the same blur): the ground under
+  /// a shadow counts as much as the ground in the light, and what is left of a glare's slope adds nothing.
+  bool normalise_contrast = false;
   int max_iterations = 50;          ///< ECC iterations per start
   /// A neighbourhood (7 x 7 reduced pixels) that correlates at least this well with itself at the same place
   /// in the other image stayed still while the robot moved: it is not ground and is left out.
@@ -27,7 +30,7 @@ struct ImageAlignmentSettings {
   double refine_border_fraction = 0.1;
 };
 
-/// An image as the alignment uses it: reduced, its background light removed (CV_32F).
+/// An image as the alignment uses it: reduced, its background light removed, its contrast normalised (CV_32F).
 struct AlignmentImage {
   cv::Mat pixels;
   double scale = 1.0;  ///< original image pixels per pixel of `pixels` (the decoder's and our reduction)
@@ -45,6 +48,9 @@ struct ImageAlignment {
   /// The same correlation with no motion at all: near `correlation`, the images do not tell the motion from rest
   /// (what they show that is not left out as still, a lamp's glare, a shadow, moves with the camera).
   double rest_correlation = 0.0;
+  /// The best correlation of the starts that ended elsewhere (farther than settings.probe_px from the solution):
+  /// near `correlation`, another motion explains the images as well (a floor that repeats). -1: none did.
+  double rival_correlation = -1.0;
 };
 
 /// 255 where the images may show moving ground, 0 where a textured neighbourhood looks the same at the same place
@@ -57,7 +63,8 @@ cv::Mat movingPixels(const cv::Mat& previous, const cv::Mat& moved_previous, con
 
 /// The rigid warp of `current` onto `previous` (both alignmentImage()s of one size) from each start (original
 /// pixels, current to previous); the one of highest correlation, probed from settings.probe_px around it. The
-/// first start is the expected motion that still parts are told by (movingPixels).
+/// first start is the expected motion that still parts are told by (movingPixels). Starts that end elsewhere are
+/// rivals (rival_correlation).
 ImageAlignment alignImages(const AlignmentImage& previous, const AlignmentImage& current, const std::vector<cv::Matx23d>& starts,
                            const ImageAlignmentSettings& settings);
 

@@ -78,15 +78,22 @@ struct OdometryChecks {
   double low_overlap_sigma_m = 0.005;
   double low_overlap_sigma_rad = 0.005;
   /// Not in the paper: where the fit still has too little evidence (too few matches or inliers, or all of them in
-  /// a line: a smooth floor, mortar lines), the motion is found by aligning the two images themselves
-  /// (core/ImageAlignment.hpp, reduced to align_width_px), started from the robot's usual steps. It is believed
-  /// when the alignment's correlation reaches align_min_correlation, it explains the images align_rest_ratio times
-  /// better than rest does (their decorrelation at rest over that after the warp: what is left of a floor under a
-  /// glare and a shadow may say only "no motion"), starts a few pixels around it come back within
+  /// a line: a smooth floor, mortar lines), or a fit refused for a rival or its speed that the robot's steps could
+  /// not choose, the motion is found by aligning the two images themselves (core/ImageAlignment.hpp, reduced to
+  /// align_width_px), started from one and from up to repetition_max_steps of the robot's usual steps. It is
+  /// believed when the alignment's correlation reaches align_min_correlation, it explains the images
+  /// align_rest_ratio times better than rest does and than any start that ended elsewhere does (their
+  /// decorrelation there over that after the warp: what is left of a floor under a glare and a shadow may say only
+  /// "no motion"; on tiles a start one tile over ends as well explained), starts a few pixels around it come back within
   /// align_max_spread_m and its speed is plausible; the frame says `aligned`, and align_sigma_* are added
   /// to the edge's standard deviations. false: off.
   bool align_images = true;
   int align_width_px = 160;
+  /// The images' background light is removed with a Gaussian blur this share of the reduced width; with
+  /// align_normalise_contrast each pixel is also divided by the contrast around it (over the same blur), so that the
+  /// ground under the robot's shadow counts as much as the ground in the light and a lamp's glare adds nothing.
+  double align_highpass_fraction = 0.08;
+  bool align_normalise_contrast = true;
   double align_min_correlation = 0.7;
   double align_rest_ratio = 2.0;
   double align_max_spread_m = 0.002;
@@ -317,6 +324,8 @@ void visitConfigFields(Config_& c, Visitor&& v) {
   v("odometry", "low_overlap_sigma_rad", c.odometry_checks.low_overlap_sigma_rad, kNonNegative);
   v("odometry", "align_images", c.odometry_checks.align_images, Range{});
   v("odometry", "align_width_px", c.odometry_checks.align_width_px, Range{16, 100000});
+  v("odometry", "align_highpass_fraction", c.odometry_checks.align_highpass_fraction, Range{0.001, 1.0});
+  v("odometry", "align_normalise_contrast", c.odometry_checks.align_normalise_contrast, Range{});
   v("odometry", "align_min_correlation", c.odometry_checks.align_min_correlation, Range{0.0, 1.0});
   v("odometry", "align_rest_ratio", c.odometry_checks.align_rest_ratio, kNonNegative);
   v("odometry", "align_max_spread_m", c.odometry_checks.align_max_spread_m, kPositive);

@@ -16,6 +16,8 @@ CameraModel cameraModelFrom(const CameraConfig& c) {
 ImageAlignmentSettings alignmentSettingsFrom(const Config& config) {
   ImageAlignmentSettings settings;
   settings.width_px = config.odometry_checks.align_width_px;
+  settings.highpass_fraction = config.odometry_checks.align_highpass_fraction;
+  settings.normalise_contrast = config.odometry_checks.align_normalise_contrast;
   return settings;
 }
 

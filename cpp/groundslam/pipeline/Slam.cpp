@@ -534,9 +534,12 @@ OdometryEdge Slam::estimateOdometry(const Keyframe& previous, const Keyframe& cu
       return edge;
     }
   }
-  // Still too little evidence (a smooth floor, mortar lines): the images themselves are aligned. Not on a floor
-  // that repeats: started near the usual step, an alignment finds the repetition nearest to it.
-  if (too_little && !repeated_floor) {
+  // Still too little evidence (a smooth floor, mortar lines), or a fit and rivals the robot's steps could not tell
+  // apart, or a motion its speed refutes: the images themselves are aligned. On a floor that repeats, an alignment
+  // started near the usual step finds the repetition nearest to it: it is believed only if starts several steps on
+  // (frames dropped without a trace) end there too or explain the images far less well.
+  const bool refused = fit.status == FitStatus::ambiguous || fit.status == FitStatus::implausible_motion;
+  if (too_little || refused) {
     if (auto aligned = odometryByAlignment(previous, current, alignment)) {
       aligned->matches = result.matches;
       return *aligned;

@@ -110,7 +110,8 @@ class Slam {
                                 const std::optional<std::vector<Match>>& matched_ahead, const AlignmentImage& alignment,
                                 FrameResult& result);
   /// Where the features are too few: the motion from aligning the previous image with this one, started from the
-  /// robot's usual steps (odometry.align_*), or nothing (pipeline/SlamAlignment.cpp).
+  /// robot's usual steps and from several times as many (odometry.align_*; an alignment with a rival is not believed),
+  /// or nothing (pipeline/SlamAlignment.cpp).
   std::optional<OdometryEdge> odometryByAlignment(const Keyframe& previous, const Keyframe& current, const AlignmentImage& alignment) const;
   /// What the images say of a fit: not checked (enough inliers), it agrees, the aligned motion replaces it, or nothing.
   struct FitCheck {
@@ -133,8 +134,13 @@ class Slam {
   OdometryEdge alignedEdge(const Pose2& T_prev_curr) const;
   /// An alignment that passes odometry.align_* (correlation, better than rest, probes' spread).
   bool believable(const ImageAlignment& aligned) const;
-  /// Aligns from the usual steps, or failing that from the one turn on the spot that makes the images most alike.
-  std::optional<ImageAlignment> alignFromSteps(const AlignmentImage& before, const AlignmentImage& now, int steps) const;
+  /// Aligns from the usual steps (on a floor that repeats, from up to repetition_max_steps times as many too: an
+  /// alignment with a rival is not believed), or failing that from the one turn on the spot that makes the images
+  /// most alike.
+  /// Image warps where `steps` of the robot's usual steps put the ground; with `more_steps`, also where up to
+  /// repetition_max_steps times as many do.
+  std::vector<cv::Matx23d> stepStarts(int steps, bool more_steps) const;
+  std::optional<ImageAlignment> alignFromSteps(const AlignmentImage& before, const AlignmentImage& now, int steps, bool more_steps) const;
   /// Right after tracking was lost (within odometry.bridge_max_frames frames): the current frame measured against
   /// the last tracked one joins the segment to the map, as a relocalization would (the map may not reach where the
   /// robot goes, and weak floors give global localization too little); when that frame is of a lost segment, the

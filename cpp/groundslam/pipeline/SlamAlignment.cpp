@@ -88,28 +88,43 @@ bool Slam::believable(const ImageAlignment& aligned) const {
   const OdometryChecks& checks = config_.odometry_checks;
   // Explaining the images no better than rest is not a measurement of motion: the images' decorrelation at rest
   // must be align_rest_ratio times that after the warp.
+  // Nor is explaining them no better than another motion does (a start that ended one repetition over).
+  const double rival = std::max(aligned.rest_correlation, aligned.rival_correlation);
   return aligned.converged && aligned.correlation >= checks.align_min_correlation &&
          aligned.spread_px * ground_sample_m_ <= checks.align_max_spread_m &&
-         1.0 - aligned.rest_correlation >= checks.align_rest_ratio * (1.0 - aligned.correlation);
+         1.0 - rival >= checks.align_rest_ratio * (1.0 - aligned.correlation);
 }
 
-std::optional<ImageAlignment> Slam::alignFromSteps(const AlignmentImage& before, const AlignmentImage& now, int steps) const {
-  // Started where `steps` of the robot's usual steps put the ground (at rest before any motion was measured).
+std::vector<cv::Matx23d> Slam::stepStarts(int steps, bool more_steps) const {
+  // Where `steps` of the robot's usual steps put the ground (at rest before any motion was measured); with more steps
+  // also where 2 .. repetition_max_steps times as many put it (frames dropped without a trace). On a floor that
+  // repeats, a start that ends one repetition over, as well explained, refutes the alignment (believable).
+  const int most_steps = more_steps && last_good_odometry_ ? steps * std::max(1, config_.odometry_checks.repetition_max_steps) : steps;
   std::vector<cv::Matx23d> starts;
-  for (const Pose2& step : last_good_odometry_ ? usualSteps() : std::vector<Pose2>{Pose2()}) {
-    Pose2 motion;
-    for (int k = 0; k < steps; ++k) motion = motion * step;
-    starts.push_back(imageWarpOf(motion));
+  for (int total = steps; total <= most_steps; total += steps) {
+    for (const Pose2& step : last_good_odometry_ ? usualSteps() : std::vector<Pose2>{Pose2()}) {
+      Pose2 motion;
+      for (int k = 0; k < total; ++k) motion = motion * step;
+      starts.push_back(imageWarpOf(motion));
+    }
   }
+  return starts;
+}
+
+std::optional<ImageAlignment> Slam::alignFromSteps(const AlignmentImage& before, const AlignmentImage& now, int steps,
+                                                   bool more_steps) const {
+  const std::vector<cv::Matx23d> starts = stepStarts(steps, more_steps);
   const ImageAlignment aligned = alignImages(before, now, starts, alignment_settings_);
   if (believable(aligned)) return aligned;
-  // A turn on the spot the steps did not foresee (a sharp turn): started from the turn about the robot's origin
-  // that makes the images most alike, every 5 degrees, if no other comes within 0.1 of its correlation (a floor
-  // that looks alike turned several ways, bricks turned by half a turn, is not aligned).
+  // A turn on the spot the steps did not foresee (a sharp turn): started from the turns about the robot's origin
+  // that make the images most alike, every 5 degrees, a few at most within 0.1 of the best correlation. Each is
+  // aligned; where two end apart about as well explained (a floor that looks alike turned several ways, bricks turned
+  // by half a turn), the turn is not known (believable).
   const auto origin_px = camera_.groundToPixel(Eigen::Vector2d::Zero());
   if (!origin_px) return std::nullopt;
   const std::vector<cv::Matx23d> turns = turnCandidates(before, now, cv::Point2d(origin_px->x(), origin_px->y()), 5.0, 0.1);
-  if (turns.size() != 1) return std::nullopt;
+  constexpr size_t kMostTurns = 4;
+  if (turns.empty() || turns.size() > kMostTurns) return std::nullopt;
   const ImageAlignment turned = alignImages(before, now, turns, alignment_settings_);
   if (believable(turned)) return turned;
   return std::nullopt;
@@ -119,7 +134,8 @@ std::optional<OdometryEdge> Slam::odometryByAlignment(const Keyframe& previous, 
                                                       const AlignmentImage& alignment) const {
   const OdometryChecks& checks = config_.odometry_checks;
   if (!checks.align_images || previous_alignment_.pixels.empty() || alignment.pixels.empty()) return std::nullopt;
-  const auto aligned = alignFromSteps(previous_alignment_, alignment, 1);
+  // From one to several usual steps: frames dropped without a trace leave no gap in the timestamps.
+  const auto aligned = alignFromSteps(previous_alignment_, alignment, 1, true);
   if (!aligned) return std::nullopt;
   const Pose2 T_prev_curr = groundMotionOf(aligned->W_previous_current);
   if (!plausibleMotion(T_prev_curr, previous.timestamp, current.timestamp)) return std::nullopt;

@@ -67,7 +67,7 @@ std::optional<Slam::Bridge> Slam::bridgeByFeatures(const Keyframe& current) cons
 std::optional<Slam::Bridge> Slam::bridgeByAlignment(const Keyframe& current, const AlignmentImage& alignment) const {
   const OdometryChecks& checks = config_.odometry_checks;
   if (!checks.align_images || tracked_alignment_.pixels.empty() || alignment.pixels.empty()) return std::nullopt;
-  const auto aligned = alignFromSteps(tracked_alignment_, alignment, current.index - tracked_frame_);
+  const auto aligned = alignFromSteps(tracked_alignment_, alignment, current.index - tracked_frame_, false);
   if (!aligned) return std::nullopt;
   const Pose2 T_tracked_current = groundMotionOf(aligned->W_previous_current);
   if (!plausibleMotion(T_tracked_current, tracked_time_, current.timestamp)) return std::nullopt;
