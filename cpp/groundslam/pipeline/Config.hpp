@@ -78,9 +78,9 @@ struct OdometryChecks {
   double low_overlap_sigma_m = 0.005;
   double low_overlap_sigma_rad = 0.005;
   /// Not in the paper: where the fit still has too little evidence (too few matches or inliers, or all of them in
-  /// a line: a smooth floor, mortar lines), or a fit refused for a rival or its speed that the robot's steps could
-  /// not choose, the motion is found by aligning the two images themselves (core/ImageAlignment.hpp, reduced to
-  /// align_width_px), started from one and from up to repetition_max_steps of the robot's usual steps. It is
+  /// a line: a smooth floor, mortar lines) and the floor does not repeat, the motion is found by aligning the two
+  /// images themselves (core/ImageAlignment.hpp, reduced to align_width_px), started from one and from up to
+  /// repetition_max_steps of the robot's usual steps. It is
   /// believed when the alignment's correlation reaches align_min_correlation, it explains the images
   /// align_rest_ratio times better than rest does and than any start that ended elsewhere does (their
   /// decorrelation there over that after the warp: what is left of a floor under a glare and a shadow may say only
