@@ -93,7 +93,7 @@ struct OdometryChecks {
   /// align_normalise_contrast each pixel is also divided by the contrast around it (over the same blur), so that the
   /// ground under the robot's shadow counts as much as the ground in the light and a lamp's glare adds nothing.
   double align_highpass_fraction = 0.08;
-  bool align_normalise_contrast = true;
+  bool align_normalise_contrast = false;
   double align_min_correlation = 0.7;
   double align_rest_ratio = 2.0;
   double align_max_spread_m = 0.002;
