@@ -192,25 +192,25 @@ ImageAlignment alignImages(const AlignmentImage& previous, const AlignmentImage&
   }
   if (solutions.empty()) return best;
   const auto winner = std::max_element(solutions.begin(), solutions.end(), [](const auto& a, const auto& b) { return a.second < b.second; });
-  const std::optional<cv::Matx23d> best_reduced = winner->first;
+  const cv::Matx23d best_reduced = winner->first;
   best.correlation = winner->second;
   best.converged = true;
   for (const auto& [warp, correlation] : solutions) {
-    if (warpDistance(warp, *best_reduced, previous.pixels.size()) > settings.probe_px) {
+    if (warpDistance(warp, best_reduced, previous.pixels.size()) > settings.probe_px) {
       best.rival_correlation = std::max(best.rival_correlation, correlation);
     }
   }
   // ECC's correlation at rest, over the pixels the alignment used.
   best.rest_correlation = maskedCorrelation(previous_ground, current_ground, moving, 0.0);
-  best.W_previous_current = toOriginalPixels(*best_reduced, previous.scale);
+  best.W_previous_current = toOriginalPixels(best_reduced, previous.scale);
   // Probes: from starts shifted around the solution, the alignment must come back to it.
   const double d = settings.probe_px;
   for (const cv::Vec2d& shift : {cv::Vec2d(d, 0), cv::Vec2d(0, d), cv::Vec2d(-d, 0), cv::Vec2d(0, -d)}) {
-    cv::Matx23d start = *best_reduced;
+    cv::Matx23d start = best_reduced;
     start(0, 2) += shift[0];
     start(1, 2) += shift[1];
     const auto probe = eccFrom(previous_ground, current_ground, moving, start, settings.max_iterations);
-    const double off = probe ? warpDistance(probe->first, *best_reduced, previous.pixels.size()) : d * 1e3;
+    const double off = probe ? warpDistance(probe->first, best_reduced, previous.pixels.size()) : d * 1e3;
     best.spread_px = std::max(best.spread_px, off * previous.scale);
   }
   return best;

@@ -30,7 +30,7 @@ struct ImageAlignmentSettings {
   double refine_border_fraction = 0.1;
 };
 
-/// An image as the alignment uses it: reduced, its background light removed, its contrast normalised (CV_32F).
+/// An image as the alignment uses it: reduced, its background light removed, its contrast normalised if asked (CV_32F).
 struct AlignmentImage {
   cv::Mat pixels;
   double scale = 1.0;  ///< original image pixels per pixel of `pixels` (the decoder's and our reduction)

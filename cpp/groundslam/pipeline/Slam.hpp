@@ -134,12 +134,11 @@ class Slam {
   OdometryEdge alignedEdge(const Pose2& T_prev_curr) const;
   /// An alignment that passes odometry.align_* (correlation, better than rest, probes' spread).
   bool believable(const ImageAlignment& aligned) const;
-  /// Aligns from the usual steps (on a floor that repeats, from up to repetition_max_steps times as many too: an
-  /// alignment with a rival is not believed), or failing that from the one turn on the spot that makes the images
-  /// most alike.
   /// Image warps where `steps` of the robot's usual steps put the ground; with `more_steps`, also where up to
   /// repetition_max_steps times as many do.
   std::vector<cv::Matx23d> stepStarts(int steps, bool more_steps) const;
+  /// Aligns from stepStarts (an alignment with a rival is not believed), or failing that from the few turns on the
+  /// spot that make the images most alike.
   std::optional<ImageAlignment> alignFromSteps(const AlignmentImage& before, const AlignmentImage& now, int steps, bool more_steps) const;
   /// Right after tracking was lost (within odometry.bridge_max_frames frames): the current frame measured against
   /// the last tracked one joins the segment to the map, as a relocalization would (the map may not reach where the
