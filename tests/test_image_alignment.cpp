@@ -76,15 +76,20 @@ double cornerError(const cv::Matx23d& W, const cv::Matx23d& expected) {
 
 /// Two 320 x 240 views of one smooth floor, the current one seen through `W_previous_current` (a current pixel x
 /// shows what the previous image shows at W x); `shadow` darkens the same upper-left triangle of both, sharp-edged.
-std::pair<cv::Mat, cv::Mat> twoViews(const cv::Matx23d& W_previous_current, bool shadow) {
-  const cv::Mat floor = smoothTexture(480, 4.0, 7);
-  cv::Mat previous = floor(cv::Rect(80, 120, 320, 240)).clone();
+/// Two 320 x 240 views of `floor` (at least 400 x 360): the previous one its crop at (80, 120), the current one seen
+/// through `W_previous_current`.
+std::pair<cv::Mat, cv::Mat> viewsOf(const cv::Mat& floor, const cv::Matx23d& W_previous_current) {
   cv::Mat current;
   // Sampled from the whole floor so that no border shows: floor coordinates = W x + the crop's corner.
   cv::Matx23d W_floor = W_previous_current;
   W_floor(0, 2) += 80.0;
   W_floor(1, 2) += 120.0;
   cv::warpAffine(floor, current, W_floor, cv::Size(320, 240), cv::INTER_LINEAR | cv::WARP_INVERSE_MAP);
+  return {floor(cv::Rect(80, 120, 320, 240)).clone(), current};
+}
+
+std::pair<cv::Mat, cv::Mat> twoViews(const cv::Matx23d& W_previous_current, bool shadow) {
+  auto [previous, current] = viewsOf(smoothTexture(480, 4.0, 7), W_previous_current);
   if (shadow) {
     const std::vector<cv::Point> triangle{{0, 0}, {250, 0}, {0, 190}};
     for (cv::Mat* image : {&previous, &current}) {
@@ -220,23 +225,15 @@ TEST(ImageAlignment, OnAFloorThatRepeatsAStartOneRepetitionOverEndsThereAsWellEx
   const cv::Mat tile = smoothTexture(48, 2.0, 11);
   cv::Mat floor;
   cv::repeat(tile, 10, 10, floor);
-  const auto views = [&](const cv::Mat& ground, const cv::Matx23d& W) {
-    cv::Matx23d W_floor = W;
-    W_floor(0, 2) += 80.0;
-    W_floor(1, 2) += 120.0;
-    cv::Mat current;
-    cv::warpAffine(ground, current, W_floor, cv::Size(320, 240), cv::INTER_LINEAR | cv::WARP_INVERSE_MAP);
-    return std::make_pair(ground(cv::Rect(80, 120, 320, 240)).clone(), current);
-  };
   const cv::Matx23d truth = rigidWarp(0.0, 13.0, 1.0);
   const std::vector<cv::Matx23d> starts{rigidWarp(0.0, 12.0, 0.0), rigidWarp(0.0, 12.0 + 48.0, 0.0)};
   const ImageAlignmentSettings settings;
-  const auto [previous, current] = views(floor, truth);
+  const auto [previous, current] = viewsOf(floor, truth);
   const ImageAlignment repeated = alignImages(alignmentImage(previous, settings), alignmentImage(current, settings), starts, settings);
   ASSERT_TRUE(repeated.converged);
   EXPECT_GT(repeated.rival_correlation, repeated.correlation - 0.05);
   // A floor that does not repeat: the far start ends elsewhere, far less well explained, or at the same place.
-  const auto [p, c] = views(smoothTexture(600, 2.0, 11), truth);
+  const auto [p, c] = viewsOf(smoothTexture(600, 2.0, 11), truth);
   const ImageAlignment unique = alignImages(alignmentImage(p, settings), alignmentImage(c, settings), starts, settings);
   ASSERT_TRUE(unique.converged);
   EXPECT_LT(cornerError(unique.W_previous_current, truth), 0.5);
@@ -254,6 +251,18 @@ TEST(ImageAlignment, WarpsConvertBetweenOriginalAndReducedPixelsExactly) {
 
 namespace {
 
+/// One lap of `frames` frames at 1 cm per frame over a user texture laid 0.6 m wide, sensor noise 2 grey levels.
+sim::SimulationSettings floorRun(sim::PathKind kind, int frames, std::uint64_t seed) {
+  sim::SimulationSettings s;
+  s.path.kind = kind;
+  s.path.frames = frames;
+  s.path.laps = 1;
+  s.photometry.noise_sigma = 2.0;
+  s.user_texture_width_m = 0.6;
+  s.seed = seed;
+  return s;
+}
+
 /// How far frame i's odometry motion is from the true one: metres, radians.
 std::pair<double, double> odometryError(const FrameResult& r, const sim::SequenceSimulator& simulator, int i) {
   const Pose2 expected = between(simulator.groundTruth()[size_t(i - 1)], simulator.groundTruth()[size_t(i)]);
@@ -270,13 +279,7 @@ struct SmoothFloorRun {
 /// A loop on a smooth floor (blobs 3 cm wide, 18 x 14 cm footprint), 1 cm per frame: odometry alone, or with
 /// loop closure and frame `blank` covered (a blank image: tracking is lost there).
 SmoothFloorRun runSmoothFloor(bool align_images, bool loop_closure = false, int blank = -1) {
-  sim::SimulationSettings s;
-  s.path.kind = sim::PathKind::loop;
-  s.path.frames = 60;
-  s.path.laps = 1;
-  s.photometry.noise_sigma = 2.0;
-  s.user_texture_width_m = 0.6;
-  s.seed = 5;
+  sim::SimulationSettings s = floorRun(sim::PathKind::loop, 60, 5);
   const sim::SequenceSimulator simulator(s, smoothTexture(512, 12.0, 11));
   Config config;
   config.camera = cameraConfigOf(s.camera, s.mounting_height_m);
@@ -320,13 +323,7 @@ struct WeakFitRun {
 /// Odometry alone on a floor of bricks, 1 cm per frame; a fit with fewer than `check_below` inliers is checked;
 /// `ok_sigmas` > 0: a frame is `ok` only if its fit's covariance vouches for it (OdometryChecks::ok_sigmas).
 WeakFitRun runBrickFloor(int check_below, sim::PathKind path, std::uint64_t seed, bool outdoors = false, double ok_sigmas = 0.0) {
-  sim::SimulationSettings s;
-  s.path.kind = path;
-  s.path.frames = 120;
-  s.path.laps = 1;
-  s.photometry.noise_sigma = 2.0;
-  s.user_texture_width_m = 0.6;
-  s.seed = seed;
+  sim::SimulationSettings s = floorRun(path, 120, seed);
   if (outdoors) s.artifacts = {0.6, 6, 0.8, 0.15};
   const sim::SequenceSimulator simulator(s, brickTexture(512, 24, seed));
   Config config;
@@ -470,13 +467,7 @@ namespace {
 /// Odometry alone (no loop closure) over a faint smooth floor (blobs `blur_px` texture pixels wide at a tenth of the
 /// contrast) under the outdoor look, the robot driving a 40-frame lawnmower lane at 1 cm per frame: every frame's result.
 std::vector<FrameResult> faintFloorRun(double blur_px) {
-  sim::SimulationSettings s;
-  s.path.kind = sim::PathKind::lawnmower;
-  s.path.frames = 40;
-  s.path.laps = 1;
-  s.photometry.noise_sigma = 2.0;
-  s.user_texture_width_m = 0.6;
-  s.seed = 5;
+  sim::SimulationSettings s = floorRun(sim::PathKind::lawnmower, 40, 5);
   s.artifacts = {0.6, 6, 0.8, 0.15};
   cv::Mat floor;
   smoothTexture(512, blur_px, 5).convertTo(floor, CV_8U, 0.1, 128.0 * 0.9);
