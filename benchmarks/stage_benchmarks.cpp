@@ -24,6 +24,7 @@
 #include "groundslam/core/RigidFit.hpp"
 #include "groundslam/bow/BowDatabase.hpp"
 #include "groundslam/io/VocabularyFile.hpp"
+#include "groundslam/pipeline/FramePreparer.hpp"
 #include "groundslam/sim/Simulator.hpp"
 
 using namespace groundslam;
@@ -350,6 +351,30 @@ void BM_HeadingRefinement(benchmark::State& state) {
   state.counters["correlation"] = correlation;
 }
 BENCHMARK(BM_HeadingRefinement)->Unit(benchmark::kMillisecond);
+
+void BM_HeadingImage(benchmark::State& state) {
+  // Paid by every frame while headings are refined (outdoor.heading_image_width_px): the HD image reduced to 320
+  // wide, its background light removed, its contrast normalised, the light's edges found.
+  const ImageAlignmentSettings settings = headingImageSettingsFrom(Config());
+  for (auto _ : state) benchmark::DoNotOptimize(alignmentImage(frames().first, settings));
+}
+BENCHMARK(BM_HeadingImage)->Unit(benchmark::kMillisecond);
+
+void BM_HeadingRefinementWithArtifacts(benchmark::State& state) {
+  // Paid by every measured frame where something stays still in the image: one ECC run on the contrast-normalised
+  // images (320 wide) from the fit's motion, the still parts and the light's edges left out.
+  const ImageAlignmentSettings settings = headingImageSettingsFrom(Config());
+  const AlignmentImage a = alignmentImage(frames().first, settings), b = alignmentImage(frames().second, settings);
+  const cv::Matx23d start = trueWarpTwoPixelsOff();
+  double correlation = 0.0;
+  for (auto _ : state) {
+    const ImageAlignment refined = refineAlignment(a, b, start, settings);
+    correlation = refined.correlation;
+    benchmark::DoNotOptimize(refined);
+  }
+  state.counters["correlation"] = correlation;
+}
+BENCHMARK(BM_HeadingRefinementWithArtifacts)->Unit(benchmark::kMillisecond);
 
 void BM_TrackingImage(benchmark::State& state) {
   // Paid by every frame while the mount is estimated (outdoor.track_points): the HD image reduced to 320 wide, its

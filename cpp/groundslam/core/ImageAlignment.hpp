@@ -17,6 +17,10 @@ struct ImageAlignmentSettings {
   /// Each pixel then divided by the contrast around it (the root mean square over the same blur): the ground under
   /// a shadow counts as much as the ground in the light, and what is left of a glare's slope adds nothing.
   bool normalise_contrast = false;
+  /// With normalise_contrast: pixels where the background light changes by more than this share of its level over
+  /// one blur width (a shadow's edge, a glare's rim: lines the high-pass leaves that move with the light, not with
+  /// the ground) are set to 0. 0: none are.
+  double light_edge_slope = 0.0;
   int max_iterations = 50;          ///< ECC iterations per start
   /// A neighbourhood (7 x 7 reduced pixels) that correlates at least this well with itself at the same place
   /// in the other image stayed still while the robot moved: it is not ground and is left out.
@@ -34,6 +38,8 @@ struct ImageAlignmentSettings {
 struct AlignmentImage {
   cv::Mat pixels;
   double scale = 1.0;  ///< original image pixels per pixel of `pixels` (the decoder's and our reduction)
+  /// 255 where `pixels` may show the ground, 0 on the light's edges (settings.light_edge_slope); empty: everywhere.
+  cv::Mat ground;
 };
 
 /// `gray` (8-bit) was already reduced `reduced_by` times from the original image (a decoder's reduction).

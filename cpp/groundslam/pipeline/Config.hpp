@@ -116,8 +116,9 @@ struct OdometryChecks {
   /// standard deviations (a fit of a dozen or two keypoints on a weak floor is a degree off one time in ten).
   /// 0: never.
   int align_confirm_below_inliers = 30;
-  /// Every measured motion (not a low-overlap, aligned or lost one, nor where something stays still in the image)
-  /// has its heading refined by aligning the images from it: the keypoints' heading and the images' are combined by
+  /// Every measured motion (not a low-overlap, aligned or lost one) has its heading refined by aligning the images
+  /// from it (where something stays still in them, images of their own: outdoor.heading_image_width_px): the
+  /// keypoints' heading and the images' are combined by
   /// their variances, the images' learnt over the run (the squared differences less the fits' own variance) and at
   /// least this standard deviation (degrees; measured 0.007-0.011 at 160 pixels wide against the keypoints'
   /// 0.02-0.04). Images less precise than the keypoints are not used. An alignment that does not converge,
@@ -215,6 +216,18 @@ struct OutdoorConfig {
   /// (core/PointTracking.hpp) rather than by its matched keypoint: a few hundredths of a pixel instead of most of one.
   bool track_points = true;
   double track_sigma_px = 0.1;     ///< noise of a tracked point, pixels of the tracking image (320 wide or less)
+  /// Where the robot's own artifacts are seen, the odometry's heading is refined (odometry.align_heading_sigma_deg)
+  /// on images of their own: reduced to this width or less, the background light removed with a blur of
+  /// heading_highpass_fraction of it, and each pixel divided by the contrast around it, so that the ground in the
+  /// shadow counts as much as the ground in the light and a glare's slope adds nothing (measured on the outdoor
+  /// carpet lawnmower, consecutive frames aligned: 0.042 degrees RMS at 320 pixels and 2%, against 0.11 for the
+  /// keypoints; the plain images at 160 pixels and 8% are off on most frames). 0: not refined there.
+  int heading_image_width_px = 320;
+  double heading_highpass_fraction = 0.02;
+  /// In those images, pixels where the background light changes by more than this share of its level over one blur
+  /// width are left out: the shadow's edge turns with the heading and the high-pass leaves it as a line that pulls
+  /// the turn (core/ImageAlignment.hpp light_edge_slope). 0: none are.
+  double heading_light_edge_slope = 0.15;
   /// The tilt shows in the perspective between two views, more clearly the farther apart they are: the
   /// reference is the oldest recent frame within this fraction of the footprint's short side.
   double baseline_fraction = 0.4;
@@ -420,6 +433,9 @@ void visitConfigFields(Config_& c, Visitor&& v) {
   v("outdoor", "point_sigma_px", c.outdoor.point_sigma_px, kPositive);
   v("outdoor", "track_points", c.outdoor.track_points, Range{});
   v("outdoor", "track_sigma_px", c.outdoor.track_sigma_px, kPositive);
+  v("outdoor", "heading_image_width_px", c.outdoor.heading_image_width_px, Range{0, 100000});
+  v("outdoor", "heading_highpass_fraction", c.outdoor.heading_highpass_fraction, Range{0.001, 1.0});
+  v("outdoor", "heading_light_edge_slope", c.outdoor.heading_light_edge_slope, kNonNegative);
   v("outdoor", "max_pairs", c.outdoor.max_pairs, Range{3, 100000});
   v("outdoor", "pair_radius_px", c.outdoor.pair_radius_px, kPositive);
   v("outdoor", "variance_inflation", c.outdoor.variance_inflation, Range{1.0, 100.0});

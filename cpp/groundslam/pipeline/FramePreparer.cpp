@@ -21,6 +21,15 @@ ImageAlignmentSettings alignmentSettingsFrom(const Config& config) {
   return settings;
 }
 
+ImageAlignmentSettings headingImageSettingsFrom(const Config& config) {
+  ImageAlignmentSettings settings;
+  settings.width_px = config.outdoor.heading_image_width_px;
+  settings.highpass_fraction = config.outdoor.heading_highpass_fraction;
+  settings.normalise_contrast = true;
+  settings.light_edge_slope = config.outdoor.heading_light_edge_slope;
+  return settings;
+}
+
 FramePreparer::FramePreparer(const Config& config)
     : camera_(cameraModelFrom(config.camera)),
       extractor_(config.features),
@@ -29,6 +38,9 @@ FramePreparer::FramePreparer(const Config& config)
       decoder_reduction_(decoderReductionFor(config.camera.image_width, config.features.max_extraction_width)) {
   if (config.odometry_checks.align_images) alignment_ = alignmentSettingsFrom(config);
   if (config.outdoor.estimate_mount && config.outdoor.track_points) tracking_ = PointTrackingSettings{};
+  if (config.outdoor.heading_image_width_px > 0 && config.odometry_checks.align_heading_sigma_deg > 0.0) {
+    heading_ = headingImageSettingsFrom(config);
+  }
 }
 
 PreparedFrame FramePreparer::prepare(const cv::Mat& image, double timestamp, int reduced_by) const {
@@ -41,6 +53,7 @@ PreparedFrame FramePreparer::prepare(const cv::Mat& image, double timestamp, int
   prepared.features = dropNearTwins(projectToGround(image_features, camera_), near_twin_max_distance_);
   if (alignment_) prepared.alignment = alignmentImage(image, *alignment_, reduced_by);
   if (tracking_) prepared.tracking = trackingImage(image, *tracking_, reduced_by);
+  if (heading_) prepared.heading = alignmentImage(image, *heading_, reduced_by);
   prepared.project_ms = timer.lap();
   return prepared;
 }

@@ -35,10 +35,15 @@ struct PreparedFrame {
   AlignmentImage alignment;
   /// The image reduced for tracking its keypoints into the next one (outdoor.track_points; empty when off).
   TrackingImage tracking;
+  /// The image, contrast-normalised, that refines the heading where the robot's own artifacts are seen
+  /// (outdoor.heading_image_width_px; empty when 0 or when headings are not refined).
+  AlignmentImage heading;
 };
 
 /// The alignment settings a configuration describes (odometry.align_*).
 ImageAlignmentSettings alignmentSettingsFrom(const Config& config);
+/// The settings of the images that refine the heading where the robot's own artifacts are seen (outdoor.heading_*).
+ImageAlignmentSettings headingImageSettingsFrom(const Config& config);
 
 class FramePreparer {
  public:
@@ -59,6 +64,7 @@ class FramePreparer {
   int decoder_reduction_;
   std::optional<ImageAlignmentSettings> alignment_;  ///< empty: odometry.align_images is off
   std::optional<PointTrackingSettings> tracking_;    ///< empty: outdoor.track_points (or estimate_mount) is off
+  std::optional<ImageAlignmentSettings> heading_;    ///< empty: outdoor.heading_image_width_px is 0
 };
 
 }  // namespace groundslam

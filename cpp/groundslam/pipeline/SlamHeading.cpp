@@ -12,13 +12,16 @@ namespace groundslam {
 namespace {
 
 /// T's heading moved by `weight` of `difference` toward the images'; its translation so that `pivot` (a ground point
-/// of the later frame, where the fit is surest) stays where T put it; the heading's variance that of the combination.
-void combineHeading(Pose2& T, Eigen::Matrix3d& covariance, double difference, double image_variance, const Eigen::Vector2d& pivot) {
+/// of the later frame, where the fit is surest) stays where T put it; with `narrow`, the heading's variance that of
+/// the combination.
+void combineHeading(Pose2& T, Eigen::Matrix3d& covariance, double difference, double image_variance, const Eigen::Vector2d& pivot,
+                    bool narrow) {
   const double fit_variance = covariance(2, 2);
   const double weight = fit_variance / (fit_variance + image_variance);
   const Pose2 turned(0.0, 0.0, T.theta + weight * difference);
   const Eigen::Vector2d t = T.translation() + (T.rotation() - turned.rotation()) * pivot;
   T = Pose2(t.x(), t.y(), turned.theta);
+  if (!narrow) return;
   covariance(2, 2) = fit_variance * image_variance / (fit_variance + image_variance);
   for (int i = 0; i < 2; ++i) covariance(i, 2) = covariance(2, i) = (1.0 - weight) * covariance(i, 2);
 }
@@ -28,22 +31,24 @@ constexpr int kLearntHeadings = 10;
 }  // namespace
 
 std::optional<double> Slam::imageHeadingDifference(const Pose2& T_a_b, const AlignmentImage& image_a, const MountState& mount_a,
-                                                   const AlignmentImage& image_b, const MountState& mount_b) const {
+                                                   const AlignmentImage& image_b, const MountState& mount_b,
+                                                   const ImageAlignmentSettings& settings) const {
   const OdometryChecks& checks = config_.odometry_checks;
   // Started from the warp the fit makes through each frame's own mount: a start off by the tilts' shift (a pixel or
   // two) leaves the turn noisier (measured with tracked mounts on the standard gravel photo loop: the images' heading
   // 0.019 degrees RMS per frame from the calibrated camera's warp, 0.009 from this one; not ECC's stopping tolerance).
-  const ImageAlignment aligned = refineAlignment(image_a, image_b, imageWarpOf(T_a_b, mount_a, mount_b), alignment_settings_);
+  const ImageAlignment aligned = refineAlignment(image_a, image_b, imageWarpOf(T_a_b, mount_a, mount_b), settings);
   if (!aligned.converged || aligned.correlation < checks.align_min_correlation) return std::nullopt;
   const Pose2 difference = T_a_b.inverse() * groundMotionOf(aligned.W_previous_current, mount_a, mount_b);
   if (difference.translation().norm() > checks.align_check_m || std::abs(difference.theta) > checks.align_check_rad) return std::nullopt;
   return difference.theta;
 }
 
-std::optional<double> Slam::imageHeadingVariance(Spread& spread, int& count, double difference, double fit_variance) const {
-  ++count;
-  spread.keep(difference * difference, fit_variance, count);
-  if (count < kLearntHeadings) return std::nullopt;
+std::optional<double> Slam::imageHeadingVariance(HeadingImages& source, double difference, double fit_variance) const {
+  Spread& spread = source.spread;
+  ++source.count;
+  spread.keep(difference * difference, fit_variance, source.count);
+  if (source.count < kLearntHeadings) return std::nullopt;
   const double image_variance =
       std::max(std::pow(config_.odometry_checks.align_heading_sigma_deg * M_PI / 180.0, 2), spread.square_mean - spread.variance_mean);
   // Images less precise than the keypoints are not used at all: a fine texture that the reduced images blur away, or
@@ -54,19 +59,19 @@ std::optional<double> Slam::imageHeadingVariance(Spread& spread, int& count, dou
   return image_variance;
 }
 
-void Slam::refineHeadingByImages(OdometryEdge& odometry, const Keyframe& current, const AlignmentImage& alignment) {
-  if (!(config_.odometry_checks.align_heading_sigma_deg > 0.0) || previous_alignment_.pixels.empty() || alignment.pixels.empty() ||
-      odometry.used.empty()) {
+void Slam::refineHeadingByImages(OdometryEdge& odometry, const Keyframe& current, const AlignmentImage& previous,
+                                 const AlignmentImage& image, HeadingImages& source) {
+  if (!(config_.odometry_checks.align_heading_sigma_deg > 0.0) || previous.pixels.empty() || image.pixels.empty() || odometry.used.empty()) {
     return;
   }
-  const auto difference = imageHeadingDifference(odometry.T_prev_curr, previous_alignment_, previous_->mount, alignment, current.mount);
+  const auto difference = imageHeadingDifference(odometry.T_prev_curr, previous, previous_->mount, image, current.mount, source.settings);
   if (!difference) return;
-  const auto image_variance = imageHeadingVariance(image_heading_, image_headings_, *difference, odometry.covariance(2, 2));
+  const auto image_variance = imageHeadingVariance(source, *difference, odometry.covariance(2, 2));
   if (!image_variance) return;
   Eigen::Vector2d centroid = Eigen::Vector2d::Zero();  // of the fit's matches in this frame
   for (const Match& m : odometry.used) centroid += current.features.points[static_cast<size_t>(m.query)];
   centroid /= static_cast<double>(odometry.used.size());
-  combineHeading(odometry.T_prev_curr, odometry.covariance, *difference, *image_variance, centroid);
+  combineHeading(odometry.T_prev_curr, odometry.covariance, *difference, *image_variance, centroid, source.narrows_variance);
 }
 
 }  // namespace groundslam
