@@ -75,8 +75,9 @@ ImageAlignment alignImages(const AlignmentImage& previous, const AlignmentImage&
                            const ImageAlignmentSettings& settings);
 
 /// One alignment of `current` onto `previous` from `start` (original pixels, current to previous), what stays still
-/// left out as by alignImages, without probes (spread_px 0) or the correlation at rest (0): a motion already known to
-/// a pixel or two, made precise by every textured pixel rather than the keypoints alone.
+/// and the light's edges left out of both images (in the previous one, also where the start puts the current one's),
+/// without probes (spread_px 0) or the correlation at rest (0): a motion already known to a pixel or two, made
+/// precise by every textured pixel rather than the keypoints alone.
 ImageAlignment refineAlignment(const AlignmentImage& previous, const AlignmentImage& current, const cv::Matx23d& start,
                                const ImageAlignmentSettings& settings);
 

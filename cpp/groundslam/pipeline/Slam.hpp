@@ -332,11 +332,12 @@ class Slam {
     /// The combined heading's variance replaces the fit's. Not where the robot's own artifacts are seen: what is
     /// left of the shadow's edge, which turns with the heading, errs alike on every frame of a turn, and a chain
     /// that claimed the combination's variance would outweigh the loop closures that correct it (measured on the
-    /// outdoor floors, seeds 11 and 23: SLAM heading error x0.85 and x1.03 of the keypoints' alone with the fit's
-    /// variance kept, x1.02 and x1.28 with the combination's).
+    /// outdoor floors, seeds 11 and 23, before refineAlignment left out the previous pixels that land on the current
+    /// image's blanked ones: SLAM heading error x0.85 and x1.03 of the keypoints' alone with the fit's variance kept,
+    /// x1.02 and x1.28 with the combination's).
     bool narrows_variance = true;
   };
-  /// Adds one difference of the images' heading from a fit's to `spread`; the images' heading variance learnt so far
+  /// Adds one difference of the images' heading from a fit's to `source`; the images' heading variance learnt so far
   /// (what the squared differences leave beyond the fits' own variance, odometry.align_heading_sigma_deg at least),
   /// nothing while fewer than 10 differences are known.
   std::optional<double> imageHeadingVariance(HeadingImages& source, double difference, double fit_variance) const;
