@@ -360,9 +360,10 @@ void BM_HeadingImage(benchmark::State& state) {
 }
 BENCHMARK(BM_HeadingImage)->Unit(benchmark::kMillisecond);
 
-void BM_HeadingRefinementWithArtifacts(benchmark::State& state) {
+void BM_HeadingRefinementOnHeadingImages(benchmark::State& state) {
   // Paid by every measured frame where something stays still in the image: one ECC run on the contrast-normalised
-  // images (320 wide) from the fit's motion, the still parts and the light's edges left out.
+  // images (320 wide) from the fit's motion, the still parts and the light's edges left out (here clean frames:
+  // little is left out).
   const ImageAlignmentSettings settings = headingImageSettingsFrom(Config());
   const AlignmentImage a = alignmentImage(frames().first, settings), b = alignmentImage(frames().second, settings);
   const cv::Matx23d start = trueWarpTwoPixelsOff();
@@ -374,7 +375,7 @@ void BM_HeadingRefinementWithArtifacts(benchmark::State& state) {
   }
   state.counters["correlation"] = correlation;
 }
-BENCHMARK(BM_HeadingRefinementWithArtifacts)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_HeadingRefinementOnHeadingImages)->Unit(benchmark::kMillisecond);
 
 void BM_TrackingImage(benchmark::State& state) {
   // Paid by every frame while the mount is estimated (outdoor.track_points): the HD image reduced to 320 wide, its

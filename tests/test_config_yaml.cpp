@@ -164,3 +164,11 @@ TEST(ConfigYaml, ASearchStepBelowADegreeIsRefusedWithItsKey) {
   EXPECT_NO_THROW(load(std::string(kCameraYaml) + "odometry:\n  bridge_search_turn_deg: 0\n"));
   EXPECT_NO_THROW(load(std::string(kCameraYaml) + "odometry:\n  bridge_search_turn_deg: 1\n"));
 }
+
+TEST(ConfigYaml, AHeadingImageNarrowerThan16PixelsIsRefusedWithItsKey) {
+  // 0 turns the outdoor heading images off; otherwise they must be as wide as the alignment's own images at least.
+  const std::string m = inputErrorOf([&] { load(std::string(kCameraYaml) + "outdoor:\n  heading_image_width_px: 8\n"); });
+  EXPECT_NE(m.find("outdoor.heading_image_width_px"), std::string::npos) << m;
+  EXPECT_NO_THROW(load(std::string(kCameraYaml) + "outdoor:\n  heading_image_width_px: 0\n"));
+  EXPECT_NO_THROW(load(std::string(kCameraYaml) + "outdoor:\n  heading_image_width_px: 16\n"));
+}

@@ -219,7 +219,7 @@ TEST(HeadingRefinement, OutdoorsContrastNormalisedImagesCutTheHeadingErrorThroug
   EXPECT_LT(refined, 0.6 * keypoints);  // measured: 0.072 -> 0.036 degrees
 }
 
-TEST(HeadingRefinement, OutdoorsThePlainImagesAreNeverUsed) {
+TEST(HeadingRefinement, OutdoorsWithTheHeadingImagesOffTheOdometryIsTheKeypointsOwn) {
   // The robot's shadow, lens dirt, glare and bumper stay still in the image and pull the plain images' alignment
   // toward rest: where they are seen only the contrast-normalised images refine the heading, and with those off
   // every motion is the keypoints' to the bit.

@@ -113,6 +113,13 @@ std::optional<ConfigProblem> searchProblem(const OdometryChecks& checks) {
   return ConfigProblem{"odometry.bridge_search_turn_deg", "value " + std::to_string(step) + " is below 1 degree; use 0 (off) or 1 to 30"};
 }
 
+/// The heading images are off at 0; otherwise as wide as the alignment's own images must be at least.
+std::optional<ConfigProblem> headingImageProblem(const OutdoorConfig& outdoor) {
+  const int width = outdoor.heading_image_width_px;
+  if (width == 0 || width >= 16) return std::nullopt;
+  return ConfigProblem{"outdoor.heading_image_width_px", "value " + std::to_string(width) + " is below 16 pixels; use 0 (off) or 16 and more"};
+}
+
 }  // namespace
 
 std::optional<std::string> rangeProblem(double value, const Range& range) {
@@ -131,6 +138,7 @@ std::optional<ConfigProblem> findConfigProblem(const Config& config) {
   if (ranges.problem) return ranges.problem;
   if (auto problem = mountProblem(config.camera)) return problem;
   if (auto problem = searchProblem(config.odometry_checks)) return problem;
+  if (auto problem = headingImageProblem(config.outdoor)) return problem;
   return pyramidProblem(config);
 }
 

@@ -64,7 +64,7 @@ class FramePreparer {
   int decoder_reduction_;
   std::optional<ImageAlignmentSettings> alignment_;  ///< empty: odometry.align_images is off
   std::optional<PointTrackingSettings> tracking_;    ///< empty: outdoor.track_points (or estimate_mount) is off
-  std::optional<ImageAlignmentSettings> heading_;    ///< empty: outdoor.heading_image_width_px is 0
+  std::optional<ImageAlignmentSettings> heading_;    ///< empty: outdoor.heading_image_width_px or align_heading_sigma_deg is 0
 };
 
 }  // namespace groundslam

@@ -2,7 +2,8 @@
 // (core/ImageAlignment.hpp refineAlignment). Every textured pixel measures the turn: at 160 pixels wide the images'
 // heading is right to about 0.01 degrees where the keypoints' is 0.02-0.04 (measured on the simulated floors). The
 // two headings are combined by their variances, the images' learnt over the run from how far they are from the
-// keypoints'.
+// keypoints'. Where the robot's own artifacts are seen, contrast-normalised images of their own, 320 pixels wide,
+// are used instead (outdoor.heading_image_width_px).
 #include <algorithm>
 #include <cmath>
 
@@ -51,10 +52,9 @@ std::optional<double> Slam::imageHeadingVariance(HeadingImages& source, double d
   if (source.count < kLearntHeadings) return std::nullopt;
   const double image_variance =
       std::max(std::pow(config_.odometry_checks.align_heading_sigma_deg * M_PI / 180.0, 2), spread.square_mean - spread.variance_mean);
-  // Images less precise than the keypoints are not used at all: a fine texture that the reduced images blur away, or
-  // what stays still in them (the robot's shadow, glare), which also biases them toward rest (measured outdoors: the
-  // images' heading 0.12-0.14 degrees RMS from the keypoints', and 1-5% short of the keypoints' turns; on the
-  // standard floors 0.02 degrees and no bias).
+  // Images less precise than the keypoints are not used at all: a fine texture that the reduced images blur away.
+  // (Where something stays still in the image, the plain images were 0.12-0.14 degrees RMS from the keypoints' and
+  // 1-5% short of their turns; there the contrast-normalised heading images are used instead, Slam::process.)
   if (image_variance > spread.variance_mean) return std::nullopt;
   return image_variance;
 }
