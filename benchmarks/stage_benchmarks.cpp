@@ -336,10 +336,9 @@ void BM_ImageAlignment(benchmark::State& state) {
 }
 BENCHMARK(BM_ImageAlignment)->Unit(benchmark::kMillisecond);
 
-void BM_HeadingRefinement(benchmark::State& state) {
-  // Paid by every measured frame where nothing stays still in the image (odometry.align_heading_sigma_deg): the still
-  // parts and one ECC run from the fit's motion (here the simulator's true motion moved by 2 pixels), no probes.
-  const ImageAlignmentSettings settings;
+/// One heading refinement on images of `settings`: the still parts and one ECC run from the fit's motion (here the
+/// simulator's true motion moved by 2 pixels), no probes.
+void refineHeading(benchmark::State& state, const ImageAlignmentSettings& settings) {
   const AlignmentImage a = alignmentImage(frames().first, settings), b = alignmentImage(frames().second, settings);
   const cv::Matx23d start = trueWarpTwoPixelsOff();
   double correlation = 0.0;
@@ -349,6 +348,11 @@ void BM_HeadingRefinement(benchmark::State& state) {
     benchmark::DoNotOptimize(refined);
   }
   state.counters["correlation"] = correlation;
+}
+
+void BM_HeadingRefinement(benchmark::State& state) {
+  // Paid by every measured frame where nothing stays still in the image (odometry.align_heading_sigma_deg).
+  refineHeading(state, ImageAlignmentSettings());
 }
 BENCHMARK(BM_HeadingRefinement)->Unit(benchmark::kMillisecond);
 
@@ -364,16 +368,7 @@ void BM_HeadingRefinementOnHeadingImages(benchmark::State& state) {
   // Paid by every measured frame where something stays still in the image: one ECC run on the contrast-normalised
   // images (320 wide) from the fit's motion, the still parts and the light's edges left out (here clean frames:
   // little is left out).
-  const ImageAlignmentSettings settings = headingImageSettingsFrom(Config());
-  const AlignmentImage a = alignmentImage(frames().first, settings), b = alignmentImage(frames().second, settings);
-  const cv::Matx23d start = trueWarpTwoPixelsOff();
-  double correlation = 0.0;
-  for (auto _ : state) {
-    const ImageAlignment refined = refineAlignment(a, b, start, settings);
-    correlation = refined.correlation;
-    benchmark::DoNotOptimize(refined);
-  }
-  state.counters["correlation"] = correlation;
+  refineHeading(state, headingImageSettingsFrom(Config()));
 }
 BENCHMARK(BM_HeadingRefinementOnHeadingImages)->Unit(benchmark::kMillisecond);
 
