@@ -101,7 +101,7 @@ std::string describe(const sim::SimulationSettings& s, const SimulateOptions& o)
       << "\nglare: " << s.artifacts.glare << "\nbumper: " << s.artifacts.bumper << "\nspin_every: " << s.motion.spin_every << "\nspin_deg: " << s.motion.spin_deg
       << "\ndrop_frames: " << o.drop_probability << "\ndrop_max: " << o.drop_max << "\nimage_format: " << o.image_format
       << "\njpeg_quality: " << o.jpeg_quality
-      << "\nseed: " << s.seed << "\nground_seed: " << o.ground_seed << "\nground_size_m: " << s.ground_size_m << "\ngaps: [";
+      << "\nseed: " << s.seed << "\npath_seed: " << s.path.seed << "\nground_seed: " << o.ground_seed << "\nground_size_m: " << s.ground_size_m << "\ngaps: [";
   for (size_t i = 0; i < o.gaps.size(); ++i) out << (i ? ", " : "") << "'" << o.gaps[i] << "'";
   out << "]\n";
   return out.str();
@@ -220,7 +220,11 @@ void addSimulateCommand(CLI::App& app) {
   cmd->add_option("--vignetting", o->settings.photometry.vignetting, "Darkening at the corners (0-1)")->check(CLI::Range(0.0, 1.0))->capture_default_str();
   cmd->add_option("--wet-after", o->settings.wet_after, "Fraction of the path after which the ground is wet (1: never)")
       ->check(CLI::Range(0.0, 1.0))->capture_default_str();
-  cmd->add_option("--seed", o->settings.seed, "Seed of every random choice")->capture_default_str();
+  cmd->add_option("--seed", o->settings.seed, "Seed of every random choice but the path's (--path-seed)")->capture_default_str();
+  cmd->add_option("--path-seed", o->settings.path.seed,
+                  "Seed of the random walk's turns (other paths have none); apart from --seed, so that a new --seed keeps "
+                  "the path of earlier sequences")
+      ->capture_default_str();
   cmd->add_option("--ground-seed", o->ground_seed,
                   "Lay the ground from this seed over a fixed square around the origin: sessions with other paths, seeds and "
                   "looks see the same floor (0: the ground follows --seed)")

@@ -171,6 +171,18 @@ TEST(EndToEnd, InputsAsAUserGivesThem) {
   for (const auto& entry : std::filesystem::directory_iterator(dir / "seq" / "images")) images += entry.is_regular_file() ? 1u : 0u;
   EXPECT_EQ(images, 24u);
   EXPECT_NE(cliOutput("simulate --help").find("(0: 60% of the footprint)"), std::string::npos);  // the automatic lane spacing
+  // The random walk's turns follow --path-seed, not --seed: a new --seed keeps the path, a new --path-seed does not.
+  const auto walk = [&](const std::string& name, const std::string& seeds) {
+    EXPECT_EQ(runCli("simulate " + (dir / name).string() + " --path random_walk --frames 20 " + seeds + " > /dev/null"), 0);
+    return readTum((dir / name / "groundtruth.tum").string());
+  };
+  const auto first = walk("walk1", "--seed 1"), same_path = walk("walk2", "--seed 2"), other_path = walk("walk3", "--seed 1 --path-seed 2");
+  ASSERT_EQ(first.size(), 20u);
+  ASSERT_EQ(same_path.size(), 20u);
+  ASSERT_EQ(other_path.size(), 20u);
+  EXPECT_EQ(first[19].T_world_robot.translation(), same_path[19].T_world_robot.translation());
+  EXPECT_GT((first[19].T_world_robot.translation() - other_path[19].T_world_robot.translation()).norm(), 0.005);
+  EXPECT_NE(readTextFile((dir / "walk3" / "simulation.yaml").string()).find("path_seed: 2"), std::string::npos);
 
   // `run` on the folder simulate wrote is a run of its sequence.txt.
   ASSERT_EQ(runCli("run " + seq + " --out " + (dir / "folder").string()), 0);
