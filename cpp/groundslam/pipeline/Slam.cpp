@@ -95,15 +95,15 @@ FrameResult Slam::process(PreparedFrame prepared) {
     // Where something stays still in the image (the robot's shadow, glare, dirt or bumper), the alignment's plain
     // images pull toward rest and are off on most frames (measured outdoors: 1-5% of the turns lost); images whose
     // contrast is normalised, finer and less blurred, are not (outdoor.heading_image_width_px).
-    // The label judges the keypoints' fit: the images refine its heading, not its position.
-    const bool vouched = vouchedFor(odometry, current);
+    // The label judges the keypoints' fit: the images refine its heading, not its position, and a weak fit they
+    // contradict is not vouched for.
+    bool vouched = vouchedFor(odometry, current);
     if (!odometry.fallback && !odometry.aligned && !odometry.low_overlap) {
       StageTimer timer;
-      if (!artifacts_seen) {
-        refineHeadingByImages(odometry, current, previous_alignment_, prepared.alignment, plain_headings_);
-      } else {
-        refineHeadingByImages(odometry, current, previous_heading_, prepared.heading, artifact_headings_);
-      }
+      const bool contradicted =
+          artifacts_seen ? refineHeadingByImages(odometry, current, previous_heading_, prepared.heading, artifact_headings_)
+                         : refineHeadingByImages(odometry, current, previous_alignment_, prepared.alignment, plain_headings_);
+      if (contradicted && config_.odometry_checks.ok_sigmas > 0.0) vouched = false;  // ok_sigmas 0: the label is off
       result.times.fit_ms += timer.lap();
     }
     result.odometry = odometry.T_prev_curr;

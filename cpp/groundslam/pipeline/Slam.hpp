@@ -125,15 +125,16 @@ class Slam {
   struct HeadingImages;
   /// The odometry's heading refined by aligning `previous` and `image` (images of `source`'s kind) from its motion
   /// (odometry.align_heading_sigma_deg); the translation follows so that the current inliers' centroid stays where
-  /// the fit put it.
-  void refineHeadingByImages(OdometryEdge& odometry, const Keyframe& current, const AlignmentImage& previous,
+  /// the fit put it. True when the images contradict the fit: aligned, they end farther from it than
+  /// odometry.align_check_m / align_check_rad (the fit is then left as it is, and is not `ok`).
+  bool refineHeadingByImages(OdometryEdge& odometry, const Keyframe& current, const AlignmentImage& previous,
                              const AlignmentImage& image, HeadingImages& source);
   /// What the images say of a motion measured from the features, T_a_b (a: the earlier frame, its image and mount
-  /// given): the heading difference of the images' alignment from T_a_b, or nothing when the alignment fails
-  /// (no convergence, correlation below odometry.align_min_correlation, farther than align_check_m / _rad).
-  std::optional<double> imageHeadingDifference(const Pose2& T_a_b, const AlignmentImage& image_a, const MountState& mount_a,
-                                               const AlignmentImage& image_b, const MountState& mount_b,
-                                               const ImageAlignmentSettings& settings) const;
+  /// given): the images' motion relative to T_a_b, or nothing when the alignment fails (no convergence, correlation
+  /// below odometry.align_min_correlation).
+  std::optional<Pose2> imageMotionDifference(const Pose2& T_a_b, const AlignmentImage& image_a, const MountState& mount_a,
+                                             const AlignmentImage& image_b, const MountState& mount_b,
+                                             const ImageAlignmentSettings& settings) const;
   /// An edge measured by aligning the images: T_prev_curr with odometry.align_sigma_* as its covariance.
   OdometryEdge alignedEdge(const Pose2& T_prev_curr) const;
   /// An alignment that passes odometry.align_* (correlation, better than rest, probes' spread).
