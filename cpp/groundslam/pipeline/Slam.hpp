@@ -125,8 +125,9 @@ class Slam {
   struct HeadingImages;
   /// The odometry's heading refined by aligning `previous` and `image` (images of `source`'s kind) from its motion
   /// (odometry.align_heading_sigma_deg); the translation follows so that the current inliers' centroid stays where
-  /// the fit put it. True when the images contradict the fit: aligned, they end farther from it than
-  /// odometry.align_check_m / align_check_rad (the fit is then left as it is, and is not `ok`).
+  /// the fit put it. True when the images contradict a weak fit (fewer than odometry.align_check_below_inliers
+  /// inliers): aligned, they end within align_check_m of its translation but beyond align_check_rad of its heading.
+  /// The fit is then left as it is, and is not `ok`.
   bool refineHeadingByImages(OdometryEdge& odometry, const Keyframe& current, const AlignmentImage& previous,
                              const AlignmentImage& image, HeadingImages& source);
   /// What the images say of a motion measured from the features, T_a_b (a: the earlier frame, its image and mount
