@@ -7,7 +7,7 @@
 # KINDS may also name photos of real floors (a path to an image, e.g. scikit-image's gravel.png from Debian's
 # python3-skimage): each is laid PHOTO_WIDTH_M wide (0.6) and, as in docs/accuracy.md, rendered without wet ground.
 # Usage: scripts/texture_matrix.sh [BIN] [OUT] [EXTRA RUN ARGS...]
-#        (env: FRAMES, KINDS, PATHS_, SEED, CONDITION, PHOTO_WIDTH_M; RUNS: the runs folder inside OUT, runs)
+#        (env: FRAMES, KINDS, PATHS_, SEED, PATH_SEED, CONDITION, PHOTO_WIDTH_M; RUNS: the runs folder inside OUT, runs)
 set -euo pipefail
 bin=${1:-build/groundslam}
 out=${2:-data/matrix}
@@ -16,6 +16,7 @@ frames=${FRAMES:-400}
 kinds=${KINDS:-"asphalt concrete carpet tiles"}
 paths=${PATHS_:-"loop lawnmower random_walk"}
 seed=${SEED:-11}
+path_seed=${PATH_SEED:-1}  # the random walk's turns (simulate --path-seed); 1: the walk of every documented table
 condition=${CONDITION:-standard}
 runs=${RUNS:-runs}
 here=$(cd "$(dirname "$0")" && pwd)
@@ -42,7 +43,7 @@ for texture in $kinds; do
     if [ ! -f "$seq/sequence.txt" ]; then
       "$bin" simulate "$seq" "${texture_sim[@]}" --path "$path" --frames "$frames" --laps 2 \
         --jitter-deg 0.5 --motion-blur 0.3 --defocus-px 0.6 --noise 2 --exposure-variation 0.15 \
-        --vignetting 0.2 --seed "$seed" "${extra_sim[@]}" >/dev/null
+        --vignetting 0.2 --seed "$seed" --path-seed "$path_seed" "${extra_sim[@]}" >/dev/null
     fi
     "$bin" run "$seq/sequence.txt" --out "$out/$runs/${kind}_${path}" "$@" >/dev/null
     "$bin" run "$seq/sequence.txt" --out "$out/$runs/${kind}_${path}_odometry" --no-loop-closure "$@" >/dev/null
