@@ -17,6 +17,7 @@
 #include "groundslam/pipeline/FramePreparer.hpp"
 #include "groundslam/pipeline/Slam.hpp"
 #include "groundslam/sim/Simulator.hpp"
+#include "OutdoorLook.hpp"
 
 using namespace groundslam;
 
@@ -260,12 +261,7 @@ TEST(HeadingRefinement, OutdoorsAFitTheImagesTurnOtherwiseAtTheSameTranslationIs
   s.path.kind = sim::PathKind::random_walk;
   s.path.frames = 400;
   s.path.max_turn_rad = 14.3239 * kDeg;
-  s.mount_jitter_deg = 0.5;
-  s.height_jitter_m = 0.002;
-  s.motion_blur = 0.3;
-  s.wet_after = 0.6;
-  s.photometry = {2.0, 0.6, 0.15, 0.2};
-  s.artifacts = {0.6, 6, 0.8, 0.15};
+  groundslam::testing::putUnderTheOutdoorLook(s);
   s.motion = {80, 90.0};
   s.seed = 11;
   const sim::SequenceSimulator simulator(s);

@@ -13,6 +13,7 @@
 #include "groundslam/localization/GlobalLocalizer.hpp"
 #include "groundslam/pipeline/FramePreparer.hpp"
 #include "groundslam/sim/Simulator.hpp"
+#include "OutdoorLook.hpp"
 
 using namespace groundslam;
 
@@ -45,12 +46,7 @@ sim::SimulationSettings carpetLoopUnderTheOutdoorLook(std::uint64_t seed) {
   s.path.kind = sim::PathKind::loop;
   s.path.frames = 400;
   s.path.seed = s.seed = seed;
-  s.mount_jitter_deg = 0.5;
-  s.height_jitter_m = 0.002;
-  s.motion_blur = 0.3;
-  s.wet_after = 0.6;
-  s.photometry = {2.0, 0.6, 0.15, 0.2};
-  s.artifacts = {0.6, 6, 0.8, 0.15};
+  groundslam::testing::putUnderTheOutdoorLook(s);
   return s;
 }
 
