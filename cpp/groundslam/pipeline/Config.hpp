@@ -37,6 +37,10 @@ struct CameraConfig {
 struct FallbackSettings {
   double sigma_m = 0.01;     ///< standard deviation added to x and y, metres
   double sigma_rad = 0.05;   ///< standard deviation added to the heading, radians
+  /// A fit refused for its rival repetitions or its speed (a repeated floor, frames dropped without a trace), not
+  /// for too little evidence, still measures the turn when it has this many inliers: the assumed motion turns by
+  /// it (0: by the previous motion's turn).
+  int turn_min_inliers = 25;
 };
 
 /// How measurements become graph edges and when the graph is optimised.
@@ -373,6 +377,7 @@ void visitConfigFields(Config_& c, Visitor&& v) {
   v("odometry", "bridge_search_agreement_deg", c.odometry_checks.bridge_search_agreement_deg, kPositive);
   v("odometry", "fallback_sigma_m", c.fallback.sigma_m, kPositive);
   v("odometry", "fallback_sigma_rad", c.fallback.sigma_rad, kPositive);
+  v("odometry", "fallback_turn_min_inliers", c.fallback.turn_min_inliers, Range{0, 1000000});
   v("loop_closure", "enabled", c.loop_closure.enabled, Range{});
   v("loop_closure", "database_delay_frames", c.loop_closure.database_delay_frames, Range{1, 1e9});
   v("loop_closure", "max_candidates", c.loop_closure.max_candidates, Range{0, 1000});

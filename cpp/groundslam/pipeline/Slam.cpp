@@ -569,7 +569,22 @@ OdometryEdge Slam::estimateOdometry(const Keyframe& previous, const Keyframe& cu
     edge.unconfirmed = true;
     edge.covariance += sigmaCovariance(config_.odometry_checks.align_sigma_m, config_.odometry_checks.align_sigma_rad);
   }
-  return fit.ok() ? edge : fallbackOdometry(edge);
+  return fit.ok() ? edge : fallbackOdometry(edge, measuredTurn(fit));
+}
+
+std::optional<double> Slam::measuredTurn(const RigidEstimate& refused) const {
+  // Refused for its rivals or its speed, a fit of enough inliers still measures the turn: a repeated floor's rivals
+  // are the same turn a tile over, and frames dropped change where the robot is, not how it turned (measured on
+  // the seen outdoor seeds 11, 23 and 41 and photos 53 and 61: of 53 such fits with 25 inliers or more, 52 turned
+  // within 1 degree of the truth, the previous motion 15; none was further off than the previous motion).
+  const int min_inliers = config_.fallback.turn_min_inliers;
+  if (min_inliers <= 0 || refused.inliers < min_inliers) return std::nullopt;
+  if (refused.status != FitStatus::ambiguous && refused.status != FitStatus::implausible_motion) return std::nullopt;
+  const double theta = refused.T_target_source.theta;
+  for (const Pose2& rival : refused.rivals) {
+    if (std::abs(wrapAngle(rival.theta - theta)) > config_.fallback.sigma_rad) return std::nullopt;  // which turn?
+  }
+  return theta;
 }
 
 std::vector<Match> Slam::withoutRobotArtifacts(std::vector<Match> matches, const Keyframe& previous, const Keyframe& current) const {
@@ -748,8 +763,9 @@ double Slam::rockingSteps(const OdometryEdge& odometry, double previous_time, do
   return steps;
 }
 
-OdometryEdge Slam::fallbackOdometry(OdometryEdge failed) const {
-  // The paper's code assumes the previous motion again; its uncertainty grows by the fallback sigmas.
+OdometryEdge Slam::fallbackOdometry(OdometryEdge failed, std::optional<double> turn) const {
+  // The paper's code assumes the previous motion again; its uncertainty grows by the fallback sigmas. A turn the
+  // refused fit measured replaces the previous motion's.
   failed.fallback = true;
   failed.T_prev_curr = Pose2();
   failed.covariance = Eigen::Matrix3d::Zero();
@@ -757,6 +773,7 @@ OdometryEdge Slam::fallbackOdometry(OdometryEdge failed) const {
     failed.T_prev_curr = last_good_odometry_->T_prev_curr;
     failed.covariance = last_good_odometry_->covariance;
   }
+  if (turn) failed.T_prev_curr = Pose2(failed.T_prev_curr.x, failed.T_prev_curr.y, *turn);
   failed.covariance += sigmaCovariance(config_.fallback.sigma_m, config_.fallback.sigma_rad);
   return failed;
 }

@@ -238,7 +238,9 @@ class Slam {
   /// An accepted loop closure is a pair of views like any other, with a baseline of minutes instead of a
   /// frame: its factor ties the two frames' mounts across the run (the place must have kept its rays).
   void addLoopMountFactor(const LoopCandidate& loop, const Keyframe& current);
-  OdometryEdge fallbackOdometry(OdometryEdge failed) const;
+  OdometryEdge fallbackOdometry(OdometryEdge failed, std::optional<double> turn = std::nullopt) const;
+  /// The turn of a fit refused for its rivals or its speed, when it still measures one (fallback.turn_min_inliers).
+  std::optional<double> measuredTurn(const RigidEstimate& refused) const;
   /// False when the motion's translation is far from the last good motion's, scaled to the time between frames
   /// (config odometry.max_velocity_change_*).
   bool plausibleMotion(const Pose2& T_prev_curr, double previous_time, double current_time) const;
