@@ -41,6 +41,17 @@ struct FallbackSettings {
   /// for too little evidence, still measures the turn when it has this many inliers: the assumed motion turns by
   /// it (0: by the previous motion's turn).
   int turn_min_inliers = 25;
+  /// Any other failed frame takes its turn from the images' spectra (core/SpectralTurn.hpp), the mean of the last
+  /// `turn_background_frames` images taken away from both (what stays in the image: the robot's bumper, dirt on the
+  /// lens). Images reduced to this width or less, pixels (0: off, the previous motion's turn).
+  int turn_image_width_px = 320;
+  double turn_min_peak_ratio = 1.2;  ///< the spectra's best turn must correlate this many times the best one 5 degrees away
+  /// Known only up to half a turn: the one whose undoing leaves the images matching by a translation this many times
+  /// better (their phase correlation's peak); failing that, the one nearer the previous motion's turn by at least
+  /// turn_min_margin_deg.
+  double turn_half_turn_ratio = 2.0;
+  double turn_min_margin_deg = 20.0;
+  int turn_background_frames = 30;
 };
 
 /// How measurements become graph edges and when the graph is optimised.
@@ -378,6 +389,11 @@ void visitConfigFields(Config_& c, Visitor&& v) {
   v("odometry", "fallback_sigma_m", c.fallback.sigma_m, kPositive);
   v("odometry", "fallback_sigma_rad", c.fallback.sigma_rad, kPositive);
   v("odometry", "fallback_turn_min_inliers", c.fallback.turn_min_inliers, Range{0, 1000000});
+  v("odometry", "fallback_turn_image_width_px", c.fallback.turn_image_width_px, Range{0, 100000});
+  v("odometry", "fallback_turn_min_peak_ratio", c.fallback.turn_min_peak_ratio, Range{1.0, 1e9});
+  v("odometry", "fallback_turn_half_turn_ratio", c.fallback.turn_half_turn_ratio, Range{1.0, 1e9});
+  v("odometry", "fallback_turn_min_margin_deg", c.fallback.turn_min_margin_deg, Range{0.0, 90.0});
+  v("odometry", "fallback_turn_background_frames", c.fallback.turn_background_frames, Range{1, 100000});
   v("loop_closure", "enabled", c.loop_closure.enabled, Range{});
   v("loop_closure", "database_delay_frames", c.loop_closure.database_delay_frames, Range{1, 1e9});
   v("loop_closure", "max_candidates", c.loop_closure.max_candidates, Range{0, 1000});

@@ -1,5 +1,6 @@
 #include "groundslam/pipeline/FramePreparer.hpp"
 
+#include "groundslam/core/ImageReduction.hpp"
 #include "groundslam/pipeline/StageTimer.hpp"
 
 namespace groundslam {
@@ -35,7 +36,8 @@ FramePreparer::FramePreparer(const Config& config)
       extractor_(config.features),
       matcher_(config.matching),
       near_twin_max_distance_(config.features.near_twin_max_distance),
-      decoder_reduction_(decoderReductionFor(config.camera.image_width, config.features.max_extraction_width)) {
+      decoder_reduction_(decoderReductionFor(config.camera.image_width, config.features.max_extraction_width)),
+      turn_width_px_(config.fallback.turn_image_width_px) {
   if (config.odometry_checks.align_images) alignment_ = alignmentSettingsFrom(config);
   if (config.outdoor.estimate_mount && config.outdoor.track_points) tracking_ = PointTrackingSettings{};
   if (config.outdoor.heading_image_width_px > 0 && config.odometry_checks.align_heading_sigma_deg > 0.0) {
@@ -54,6 +56,7 @@ PreparedFrame FramePreparer::prepare(const cv::Mat& image, double timestamp, int
   if (alignment_) prepared.alignment = alignmentImage(image, *alignment_, reduced_by);
   if (tracking_) prepared.tracking = trackingImage(image, *tracking_, reduced_by);
   if (heading_) prepared.heading = alignmentImage(image, *heading_, reduced_by);
+  if (turn_width_px_ > 0) prepared.turn = reduceByWholeFactor(image, turn_width_px_).pixels;
   prepared.project_ms = timer.lap();
   return prepared;
 }

@@ -38,6 +38,9 @@ struct PreparedFrame {
   /// The image, contrast-normalised, that refines the heading where the robot's own artifacts are seen
   /// (outdoor.heading_image_width_px; empty when 0 or when headings are not refined).
   AlignmentImage heading;
+  /// The image reduced for measuring a failed frame's turn from its spectrum (odometry.fallback_turn_image_width_px;
+  /// CV_32F, empty when 0).
+  cv::Mat turn;
 };
 
 /// The alignment settings a configuration describes (odometry.align_*).
@@ -65,6 +68,7 @@ class FramePreparer {
   std::optional<ImageAlignmentSettings> alignment_;  ///< empty: odometry.align_images is off
   std::optional<PointTrackingSettings> tracking_;    ///< empty: outdoor.track_points (or estimate_mount) is off
   std::optional<ImageAlignmentSettings> heading_;    ///< empty: outdoor.heading_image_width_px or align_heading_sigma_deg is 0
+  int turn_width_px_ = 0;                             ///< odometry.fallback_turn_image_width_px
 };
 
 }  // namespace groundslam

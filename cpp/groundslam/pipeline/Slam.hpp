@@ -52,6 +52,7 @@ struct OdometryEdge {
   bool low_overlap = false;  ///< measured by the second, looser matching (OdometryChecks::low_overlap_ratio)
   bool aligned = false;      ///< measured by aligning the two images (OdometryChecks::align_images)
   bool unconfirmed = false;  ///< fitted on fewer than align_confirm_below_inliers inliers the images did not confirm
+  bool turn_measured = false;  ///< a fallback whose turn a refused fit measured (FallbackSettings::turn_min_inliers)
 };
 
 class Slam {
@@ -241,6 +242,10 @@ class Slam {
   OdometryEdge fallbackOdometry(OdometryEdge failed, std::optional<double> turn = std::nullopt) const;
   /// The turn of a fit refused for its rivals or its speed, when it still measures one (fallback.turn_min_inliers).
   std::optional<double> measuredTurn(const RigidEstimate& refused) const;
+  /// A failed frame's turn from the images' spectra, where they clearly tell it (FallbackSettings::turn_*).
+  void turnBySpectra(OdometryEdge& failed, const cv::Mat& turn_image) const;
+  /// The mean of the recent turn images, which turnBySpectra takes away: what stays in the image.
+  void keepTurnImage(cv::Mat turn_image);
   /// False when the motion's translation is far from the last good motion's, scaled to the time between frames
   /// (config odometry.max_velocity_change_*).
   bool plausibleMotion(const Pose2& T_prev_curr, double previous_time, double current_time) const;
@@ -365,6 +370,10 @@ class Slam {
   std::optional<Keyframe> previous_;
   AlignmentImage previous_alignment_;  ///< the previous image as the alignment uses it (odometry.align_images)
   AlignmentImage previous_heading_;    ///< the previous image as the heading refinement uses it where artifacts are seen
+  cv::Mat previous_turn_image_;  ///< the previous image as turnBySpectra uses it (CV_32F)
+  cv::Mat turn_background_;      ///< the mean of the recent turn images (FallbackSettings::turn_background_frames)
+  int turn_images_seen_ = 0;
+  double image_turn_sign_ = 1.0;  ///< a turn of the robot over a turn of the image (-1: the camera sees the ground mirrored)
   TrackingImage previous_tracking_;    ///< the previous image as the point tracker uses it (outdoor.track_points)
   std::map<int, TrackingImage> place_tracking_;  ///< graph frame -> its tracking image, for places and frames still pending
   std::deque<int> pending_place_tracking_;       ///< frames whose image is kept until it is known whether they became places

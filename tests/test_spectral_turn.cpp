@@ -1,0 +1,96 @@
+// The turn between two images from the magnitudes of their spectra (core/SpectralTurn.hpp): known turns recovered
+// whatever the translation, up to half a turn; nothing claimed between unrelated images.
+#include <cmath>
+#include <random>
+
+#include <gtest/gtest.h>
+#include <opencv2/imgproc.hpp>
+
+#include "groundslam/core/SpectralTurn.hpp"
+
+using namespace groundslam;
+
+namespace {
+
+constexpr double kDeg = M_PI / 180.0;
+
+/// Seeded noise blurred to grains about `blur_px` wide: a floor with texture at every angle.
+cv::Mat grainyFloor(int size, double blur_px, std::uint64_t seed) {
+  cv::Mat noise(size, size, CV_32F);
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<float> gauss(0.0f, 1.0f);
+  for (int r = 0; r < size; ++r) {
+    for (int c = 0; c < size; ++c) noise.at<float>(r, c) = gauss(rng);
+  }
+  cv::GaussianBlur(noise, noise, cv::Size(), blur_px);
+  // Elongated grains as on asphalt or carpet: the spectrum's magnitude has a direction to turn.
+  cv::Mat streaks;
+  cv::GaussianBlur(noise, streaks, cv::Size(), 4.0 * blur_px, blur_px);
+  return noise + 2.0f * streaks;
+}
+
+/// The 240 x 320 view of `floor` centred `offset` pixels from its centre, its content turned counterclockwise (as
+/// displayed) by `turn_deg` about the view's centre.
+cv::Mat view(const cv::Mat& floor, cv::Point2f offset, double turn_deg) {
+  const cv::Point2f centre(0.5f * static_cast<float>(floor.cols) + offset.x, 0.5f * static_cast<float>(floor.rows) + offset.y);
+  cv::Mat M = cv::getRotationMatrix2D(centre, turn_deg, 1.0);
+  M.at<double>(0, 2) -= centre.x - 160.0;
+  M.at<double>(1, 2) -= centre.y - 120.0;
+  cv::Mat out;
+  cv::warpAffine(floor, out, M, cv::Size(320, 240), cv::INTER_LINEAR);
+  return out;
+}
+
+double halfTurnApart(double a, double b) {
+  const double d = std::remainder(a - b, M_PI);
+  return std::abs(d);
+}
+
+}  // namespace
+
+TEST(SpectralTurn, KnownTurnsAreRecoveredWhereverTheViewMoved) {
+  const cv::Mat floor = grainyFloor(900, 1.5, 7);
+  const cv::Mat previous = view(floor, {0, 0}, 0.0);
+  for (const double turn_deg : {-75.0, -30.0, -8.0, 0.0, 3.0, 14.0, 45.0, 88.0}) {
+    // Moved by a third of the view as well: the magnitudes do not see the translation.
+    const cv::Mat current = view(floor, {60.0f, -40.0f}, turn_deg);
+    const SpectralTurn found = spectralTurn(previous, current);
+    EXPECT_LT(halfTurnApart(found.turn_rad, turn_deg * kDeg), 0.75 * kDeg) << turn_deg << " found " << found.turn_rad / kDeg;
+    EXPECT_GT(found.peak_ratio, 1.5) << turn_deg;
+  }
+}
+
+TEST(SpectralTurn, HalfATurnIsNotTold) {
+  const cv::Mat floor = grainyFloor(900, 1.5, 8);
+  const SpectralTurn found = spectralTurn(view(floor, {0, 0}, 0.0), view(floor, {20.0f, 10.0f}, 180.0 + 20.0));
+  EXPECT_LT(halfTurnApart(found.turn_rad, 20.0 * kDeg), 0.75 * kDeg);  // 20 or 200 degrees: the same spectrum
+}
+
+TEST(SpectralTurn, UnrelatedFloorsGiveNoClearTurn) {
+  // Two different floors of the same kind: whatever turn is best, it is not much better than the others.
+  const SpectralTurn found = spectralTurn(view(grainyFloor(900, 1.5, 9), {0, 0}, 0.0), view(grainyFloor(900, 1.5, 10), {0, 0}, 30.0));
+  EXPECT_LT(found.peak_ratio, 1.3);
+  const SpectralTurn same = spectralTurn(view(grainyFloor(900, 1.5, 9), {0, 0}, 0.0), view(grainyFloor(900, 1.5, 9), {30, 0}, 30.0));
+  EXPECT_GT(same.peak_ratio, 2.0 * found.peak_ratio);
+}
+
+TEST(SpectralTurn, UnusableInputIsAResultNotACrash) {
+  EXPECT_EQ(spectralTurn(cv::Mat(), cv::Mat()).peak_ratio, 0.0);
+  EXPECT_EQ(spectralTurn(cv::Mat::zeros(100, 100, CV_8U), cv::Mat::zeros(90, 100, CV_8U)).peak_ratio, 0.0);
+  EXPECT_EQ(spectralTurn(cv::Mat::zeros(100, 100, CV_8U), cv::Mat::zeros(100, 100, CV_8U)).peak_ratio, 0.0);  // flat
+  EXPECT_EQ(spectralTurn(cv::Mat::zeros(8, 8, CV_32F), cv::Mat::zeros(8, 8, CV_32F)).peak_ratio, 0.0);  // too small
+}
+
+TEST(SpectralTurn, ThePhaseCorrelationTellsTheRightHalfTurn) {
+  // Turned by 120 degrees and moved: the spectra say -60 or 120. Turned back by 120, the view matches the first by a
+  // translation; turned back by -60, it does not.
+  const cv::Mat floor = grainyFloor(900, 1.5, 11);
+  const cv::Mat previous = view(floor, {0, 0}, 0.0), current = view(floor, {25.0f, -15.0f}, 120.0);
+  const SpectralTurn found = spectralTurn(previous, current);
+  ASSERT_LT(halfTurnApart(found.turn_rad, 120.0 * kDeg), 0.75 * kDeg);
+  const double right = phasePeakAfterTurn(previous, current, 120.0 * kDeg);
+  const double opposite = phasePeakAfterTurn(previous, current, -60.0 * kDeg);
+  EXPECT_GT(right, 4.0 * opposite) << right << " " << opposite;
+  EXPECT_GT(right, 0.2);
+  EXPECT_EQ(phasePeakAfterTurn(cv::Mat(), cv::Mat(), 0.0), 0.0);
+}
