@@ -22,6 +22,8 @@
 #include "groundslam/core/StillFeatures.hpp"
 #include "groundslam/core/PoseGraph.hpp"
 #include "groundslam/core/RigidFit.hpp"
+#include "groundslam/core/ImageReduction.hpp"
+#include "groundslam/core/SpectralTurn.hpp"
 #include "groundslam/bow/BowDatabase.hpp"
 #include "groundslam/io/VocabularyFile.hpp"
 #include "groundslam/pipeline/FramePreparer.hpp"
@@ -371,6 +373,28 @@ void BM_HeadingRefinementOnHeadingImages(benchmark::State& state) {
   refineHeading(state, headingImageSettingsFrom(Config()));
 }
 BENCHMARK(BM_HeadingRefinementOnHeadingImages)->Unit(benchmark::kMillisecond);
+
+void BM_TurnImage(benchmark::State& state) {
+  // Paid by every frame while odometry.fallback_turn_image_width_px is on: the HD image reduced to 320 wide.
+  for (auto _ : state) benchmark::DoNotOptimize(reduceByWholeFactor(frames().first, Config().fallback.turn_image_width_px));
+}
+BENCHMARK(BM_TurnImage)->Unit(benchmark::kMillisecond);
+
+void BM_SpectralTurn(benchmark::State& state) {
+  // Paid only by a frame whose motion failed with no turn measured: the two polar spectra and their correlation,
+  // then the phase correlation of each of the two turns half a turn apart (320 x 240 images).
+  const int width = Config().fallback.turn_image_width_px;
+  const cv::Mat a = reduceByWholeFactor(frames().first, width).pixels, b = reduceByWholeFactor(frames().second, width).pixels;
+  double ratio = 0.0;
+  for (auto _ : state) {
+    const SpectralTurn found = spectralTurn(a, b);
+    benchmark::DoNotOptimize(phasePeakAfterTurn(a, b, found.turn_rad));
+    benchmark::DoNotOptimize(phasePeakAfterTurn(a, b, found.turn_rad + M_PI));
+    ratio = found.peak_ratio;
+  }
+  state.counters["peak_ratio"] = ratio;
+}
+BENCHMARK(BM_SpectralTurn)->Unit(benchmark::kMillisecond);
 
 void BM_TrackingImage(benchmark::State& state) {
   // Paid by every frame while the mount is estimated (outdoor.track_points): the HD image reduced to 320 wide, its
