@@ -242,6 +242,8 @@ class Slam {
   OdometryEdge fallbackOdometry(OdometryEdge failed, std::optional<double> turn = std::nullopt) const;
   /// The turn of a fit refused for its rivals or its speed, when it still measures one (fallback.turn_min_inliers).
   std::optional<double> measuredTurn(const RigidEstimate& refused) const;
+  /// A turn of the robot over a turn of its images (-1: the camera sees the ground mirrored).
+  static double imageTurnSign(const CameraModel& camera, const CameraIntrinsics& intrinsics);
   /// A failed frame's turn from the images' spectra, where they clearly tell it (FallbackSettings::turn_*).
   void turnBySpectra(OdometryEdge& failed, const cv::Mat& turn_image) const;
   /// The mean of the recent turn images, which turnBySpectra takes away: what stays in the image.
