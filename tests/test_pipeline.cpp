@@ -287,7 +287,8 @@ TEST(Slam, ARefusedFitOnARepeatedFloorStillMeasuresTheTurn) {
   // The same circle over 4 cm tiles and the same five frames dropped without a trace, refused here
   // (repetition_max_steps 0): where the robot went is unknown, one tile or another, but every repetition turns by
   // the same 10.7 degrees. The assumed motion takes that turn, not the previous step's 1.8 degrees; its
-  // translation is still the previous step's. With fallback.turn_min_inliers 0 it is the previous motion whole.
+  // translation is still the previous step's. With fallback.turn_min_inliers 0 the images' spectra measure the turn
+  // instead; with those off too, it is the previous motion whole.
   sim::SimulationSettings settings;
   settings.texture_kind = "tiles";
   settings.path.kind = sim::PathKind::loop;
@@ -297,10 +298,11 @@ TEST(Slam, ARefusedFitOnARepeatedFloorStillMeasuresTheTurn) {
   const Pose2 true_jump = between(simulator.groundTruth()[9], simulator.groundTruth()[15]);
   const Pose2 true_step = between(simulator.groundTruth()[8], simulator.groundTruth()[9]);
   ASSERT_NEAR(true_jump.theta * 180.0 / M_PI, 10.7, 0.1);
-  const auto refusedJump = [&](int turn_min_inliers) {
+  const auto refusedJump = [&](int turn_min_inliers, int spectra_width_px = Config().fallback.turn_image_width_px) {
     Config config = configFor(settings);
     config.odometry_checks.repetition_max_steps = 0;
     config.fallback.turn_min_inliers = turn_min_inliers;
+    config.fallback.turn_image_width_px = spectra_width_px;
     Slam slam(config, nullptr);  // odometry only
     for (int i = 0; i < 10; ++i) slam.process(simulator.renderFrame(i), i);
     return slam.process(simulator.renderFrame(15), 10.0);
@@ -311,7 +313,10 @@ TEST(Slam, ARefusedFitOnARepeatedFloorStillMeasuresTheTurn) {
   EXPECT_NEAR(kept.odometry.theta, true_jump.theta, 0.3 * M_PI / 180.0);
   EXPECT_NEAR(kept.odometry.x, true_step.x, 0.002);  // where: the previous step again
   EXPECT_NEAR(kept.odometry.y, true_step.y, 0.002);
-  const FrameResult previous = refusedJump(0);
+  const FrameResult by_spectra = refusedJump(0);
+  EXPECT_EQ(by_spectra.statusName(), kept.statusName());
+  EXPECT_NEAR(by_spectra.odometry.theta, true_jump.theta, 0.5 * M_PI / 180.0);  // measured 0.2 degrees off
+  const FrameResult previous = refusedJump(0, 0);
   EXPECT_EQ(previous.statusName(), kept.statusName());
   EXPECT_NEAR(previous.odometry.theta, true_step.theta, 0.3 * M_PI / 180.0);
 }

@@ -28,6 +28,12 @@ void Slam::turnBySpectra(OdometryEdge& failed, const cv::Mat& turn_image) const 
       turn_background_.size() != turn_image.size()) {
     return;
   }
+  // A blank or covered image shows no turn. (Less the mean of the recent images, it would show that mean's, shared
+  // with the other image's difference: no turn.) Both must show about as much contrast as each other.
+  cv::Scalar mean, deviation_previous, deviation_current;
+  cv::meanStdDev(previous_turn_image_, mean, deviation_previous);
+  cv::meanStdDev(turn_image, mean, deviation_current);
+  if (std::min(deviation_previous[0], deviation_current[0]) < 0.5 * std::max(deviation_previous[0], deviation_current[0])) return;
   // What stays in the image (the robot's bumper, lens dirt, vignetting) would say the robot did not turn: the mean of
   // the recent images, where the moving ground blurs away, takes it out of both.
   const cv::Mat previous = previous_turn_image_ - turn_background_, current = turn_image - turn_background_;
