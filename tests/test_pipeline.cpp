@@ -250,16 +250,26 @@ TEST(Slam, OnARepeatedFloorAJumpUnlikeTheRobotsSpeedIsBelievedOnlyWhereTheMatche
   EXPECT_GT(refused.inliers, configFor(settings).odometry.min_inliers);  // a fit was found: refused, not failed
 }
 
-TEST(Slam, OnARepeatedFloorAHiddenGapWhileTurningIsBelievedWhereTheRobotsStepsGo) {
-  // On 4 cm tiles the robot drives a circle, 1 cm and 1.8 degrees per frame; five frames are dropped without a
-  // trace. The 6 cm fit is refused for the robot's speed (the matches spread over the tiles' copies, so few
-  // agree with it). But only six of the robot's steps turn by its 10.7 degrees, and six steps go where it lies:
-  // it is believed, and says gap. Without that check (repetition_max_steps 0) the frame falls back.
+namespace {
+
+/// 4 cm tiles under a circle driven twice, 1 cm and 1.8 degrees a frame.
+sim::SimulationSettings circleOverTiles() {
   sim::SimulationSettings settings;
   settings.texture_kind = "tiles";
   settings.path.kind = sim::PathKind::loop;
   settings.path.frames = 400;
   settings.path.laps = 2;
+  return settings;
+}
+
+}  // namespace
+
+TEST(Slam, OnARepeatedFloorAHiddenGapWhileTurningIsBelievedWhereTheRobotsStepsGo) {
+  // On 4 cm tiles the robot drives a circle, 1 cm and 1.8 degrees per frame; five frames are dropped without a
+  // trace. The 6 cm fit is refused for the robot's speed (the matches spread over the tiles' copies, so few
+  // agree with it). But only six of the robot's steps turn by its 10.7 degrees, and six steps go where it lies:
+  // it is believed, and says gap. Without that check (repetition_max_steps 0) the frame falls back.
+  const sim::SimulationSettings settings = circleOverTiles();
   const sim::SequenceSimulator simulator(settings);
   const Pose2 true_jump = between(simulator.groundTruth()[9], simulator.groundTruth()[15]);
   ASSERT_NEAR(true_jump.translation().norm(), 0.06, 0.002);
@@ -289,11 +299,7 @@ TEST(Slam, ARefusedFitOnARepeatedFloorStillMeasuresTheTurn) {
   // the same 10.7 degrees. The assumed motion takes that turn, not the previous step's 1.8 degrees; its
   // translation is still the previous step's. With fallback.turn_min_inliers 0 the images' spectra measure the turn
   // instead; with those off too, it is the previous motion whole.
-  sim::SimulationSettings settings;
-  settings.texture_kind = "tiles";
-  settings.path.kind = sim::PathKind::loop;
-  settings.path.frames = 400;
-  settings.path.laps = 2;
+  const sim::SimulationSettings settings = circleOverTiles();
   const sim::SequenceSimulator simulator(settings);
   const Pose2 true_jump = between(simulator.groundTruth()[9], simulator.groundTruth()[15]);
   const Pose2 true_step = between(simulator.groundTruth()[8], simulator.groundTruth()[9]);

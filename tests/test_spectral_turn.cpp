@@ -1,7 +1,7 @@
 // The turn between two images from the magnitudes of their spectra (core/SpectralTurn.hpp): known turns recovered
 // whatever the translation, up to half a turn; nothing claimed between unrelated images.
 #include <cmath>
-#include <random>
+#include <cstdint>
 
 #include <gtest/gtest.h>
 #include <opencv2/imgproc.hpp>
@@ -17,11 +17,8 @@ constexpr double kDeg = M_PI / 180.0;
 /// Seeded noise blurred to grains about `blur_px` wide: a floor with texture at every angle.
 cv::Mat grainyFloor(int size, double blur_px, std::uint64_t seed) {
   cv::Mat noise(size, size, CV_32F);
-  std::mt19937_64 rng(seed);
-  std::normal_distribution<float> gauss(0.0f, 1.0f);
-  for (int r = 0; r < size; ++r) {
-    for (int c = 0; c < size; ++c) noise.at<float>(r, c) = gauss(rng);
-  }
+  cv::RNG rng(seed);
+  rng.fill(noise, cv::RNG::NORMAL, 0.0, 1.0);
   cv::GaussianBlur(noise, noise, cv::Size(), blur_px);
   // Elongated grains as on asphalt or carpet: the spectrum's magnitude has a direction to turn.
   cv::Mat streaks;

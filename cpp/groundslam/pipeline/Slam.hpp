@@ -52,7 +52,7 @@ struct OdometryEdge {
   bool low_overlap = false;  ///< measured by the second, looser matching (OdometryChecks::low_overlap_ratio)
   bool aligned = false;      ///< measured by aligning the two images (OdometryChecks::align_images)
   bool unconfirmed = false;  ///< fitted on fewer than align_confirm_below_inliers inliers the images did not confirm
-  bool turn_measured = false;  ///< a fallback whose turn a refused fit measured (FallbackSettings::turn_min_inliers)
+  bool turn_measured = false;  ///< a fallback whose turn was measured: by the refused fit or by the images' spectra
 };
 
 class Slam {
