@@ -381,6 +381,38 @@ TEST(Slam, OnARepeatedFloorHiddenGapsOnAStraightLaneAreMeasuredOrRefused) {
   EXPECT_EQ(believed, 1);
 }
 
+TEST(Slam, OnARepeatedFloorARefusedHiddenGapAssumesItsLikeliestMotion) {
+  // The same eight two-frame gaps, nothing believed by the matches' support (repetition_support_ratio 1000): seven
+  // frames are refused and lost. The assumed motion of each is its best supported candidate within a doubt of the
+  // robot's steps: 3 cm on, not 1 cm on (a tile short, one step too). Without it, the previous 1 cm step, 2 cm off.
+  const sim::SimulationSettings settings = outdoorLane("tiles");
+  const sim::SequenceSimulator simulator(settings);
+  std::vector<cv::Mat> images;
+  for (int i = 0; i < 31; ++i) images.push_back(simulator.renderFrame(i));
+  const auto count = [&](bool likeliest, int& refused, int& right) {
+    Config config = configFor(settings);
+    config.odometry_checks.repetition_support_ratio = 1000.0;
+    config.fallback.likeliest_motion = likeliest;
+    refused = right = 0;
+    for (int last = 6; last < 28; last += 3) {
+      Slam slam(config, nullptr);  // odometry only
+      for (int i = 0; i <= last; ++i) slam.process(images[size_t(i)], i);
+      const FrameResult r = slam.process(images[size_t(last + 3)], last + 1.0);
+      if (measuredByOdometry(r.status)) continue;
+      ++refused;
+      const Pose2 truth = between(simulator.groundTruth()[size_t(last)], simulator.groundTruth()[size_t(last + 3)]);
+      right += (r.odometry.translation() - truth.translation()).norm() < 0.006 ? 1 : 0;
+    }
+  };
+  int refused = 0, right = 0;
+  count(true, refused, right);
+  EXPECT_EQ(refused, 7);  // the eighth is believed, 3 mm back (the test above)
+  EXPECT_EQ(right, 7);    // measured: within 5.2 mm of the truth
+  count(false, refused, right);
+  EXPECT_EQ(refused, 7);
+  EXPECT_EQ(right, 0);
+}
+
 namespace {
 
 /// outdoorLane: ten frames at 1 cm, then the image `jump` cm further on, one frame interval later.

@@ -72,13 +72,11 @@ std::optional<size_t> MotionPrior::choose(const std::vector<Pose2>& candidates, 
   if (chosen && chosen_off <= settings_.max_doubts && next_off >= settings_.margin * std::max(1.0, chosen_off)) return chosen;
   // Several motions the robot can have made: the matches decide, if they clearly do.
   if (!(settings_.support_ratio > 0.0) || support.size() != candidates.size() || candidates.size() < 2) return std::nullopt;
-  std::transform(candidates.begin(), candidates.end(), off.begin(), [this](const Pose2& T) { return looseDoubtsOff(T); });
-  std::optional<size_t> best;
-  for (size_t i = 0; i < candidates.size(); ++i) {
-    if (off[i] <= settings_.max_doubts && (!best || support[i] > support[*best])) best = i;
-  }
+  const std::optional<size_t> best = likeliest(candidates, support);
   if (!best) return std::nullopt;
-  // A sudden change of turn is less likely than a usual step: it must also be the best supported of all.
+  std::transform(candidates.begin(), candidates.end(), off.begin(), [this](const Pose2& T) { return looseDoubtsOff(T); });
+  // A sudden change of turn is less likely than a usual step: it is the best only where no usual step is (see
+  // likeliest), and it must also be the best supported of all.
   const bool sudden_turn = !(doubtsOff(candidates[*best]) <= settings_.max_doubts);
   for (size_t i = 0; i < candidates.size(); ++i) {
     if (i == *best) continue;
@@ -87,6 +85,23 @@ std::optional<size_t> MotionPrior::choose(const std::vector<Pose2>& candidates, 
     if (static_cast<double>(support[*best]) < settings_.support_ratio * static_cast<double>(support[i])) return std::nullopt;
   }
   return best;
+}
+
+std::optional<size_t> MotionPrior::likeliest(const std::vector<Pose2>& candidates, const std::vector<int>& support) const {
+  if (support.size() != candidates.size()) return std::nullopt;
+  // Motions whose turn the steps explain first; one step with a sudden change of turn only where none is. On a
+  // repeated floor a single step overlaps the image more than the gap's true motion and gathers more matches
+  // (development seed 41's tiles loop, frame 141: one step turning 7 degrees more than usual, 31 inliers, 37 mm off;
+  // five usual steps, 13 inliers, the truth).
+  for (const bool loose : {false, true}) {
+    std::optional<size_t> best;
+    for (size_t i = 0; i < candidates.size(); ++i) {
+      const double off = loose ? looseDoubtsOff(candidates[i]) : doubtsOff(candidates[i]);
+      if (off <= settings_.max_doubts && (!best || support[i] > support[*best])) best = i;
+    }
+    if (best) return best;
+  }
+  return std::nullopt;
 }
 
 }  // namespace groundslam

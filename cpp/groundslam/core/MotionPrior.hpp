@@ -53,11 +53,15 @@ class MotionPrior {
   /// The same, where one step may also turn by any angle (a sudden change of the turn rate).
   double looseDoubtsOff(const Pose2& T_prev_curr) const;
   /// The index of the nearest candidate when it is at most max_doubts off and every other at least `margin`
-  /// times as far (and `margin` doubts) off; else, given each candidate's `support` (its inliers), the best
-  /// supported one within max_doubts when it has support_ratio times the support of every other candidate
-  /// closer than margin * max_doubts (both judged by looseDoubtsOff) and, when only a sudden change of turn
-  /// makes it a step, no less than any candidate; none otherwise.
+  /// times as far (and `margin` doubts) off; else, given each candidate's `support` (its inliers), the likeliest
+  /// one when it has support_ratio times the support of every other candidate closer than margin * max_doubts
+  /// (judged by looseDoubtsOff) and, when only a sudden change of turn makes it a step, no less than any
+  /// candidate; none otherwise.
   std::optional<size_t> choose(const std::vector<Pose2>& candidates, const std::vector<int>& support = {}) const;
+  /// The best supported candidate within max_doubts, however close the others: of those whose turn the steps
+  /// explain (doubtsOff) if any, else of those within looseDoubtsOff. The likeliest motion where choose() believes
+  /// none; none when no candidate is within max_doubts.
+  std::optional<size_t> likeliest(const std::vector<Pose2>& candidates, const std::vector<int>& support) const;
 
  private:
   std::vector<Pose2> steps_;

@@ -41,6 +41,10 @@ struct FallbackSettings {
   /// for too little evidence, still measures the turn when it has this many inliers: the assumed motion turns by
   /// it (0: by the previous motion's turn).
   int turn_min_inliers = 25;
+  /// Such a fit's likeliest motion replaces the assumed one, turn and translation: of the fit, its rivals and the
+  /// fits near each motion the robot can have made, the one with the most inliers within repetition_max_doubts of
+  /// the robot's steps (frames dropped without a trace: several steps on). The frame stays lost.
+  bool likeliest_motion = true;
   /// Any other failed frame takes its turn from the images' spectra (core/SpectralTurn.hpp), the mean of the last
   /// `turn_background_frames` images taken away from both (what stays in the image: the robot's bumper, dirt on the
   /// lens). Images reduced to this width or less, pixels (0: off, the previous motion's turn).
@@ -389,6 +393,7 @@ void visitConfigFields(Config_& c, Visitor&& v) {
   v("odometry", "fallback_sigma_m", c.fallback.sigma_m, kPositive);
   v("odometry", "fallback_sigma_rad", c.fallback.sigma_rad, kPositive);
   v("odometry", "fallback_turn_min_inliers", c.fallback.turn_min_inliers, Range{0, 1000000});
+  v("odometry", "fallback_likeliest_motion", c.fallback.likeliest_motion, Range{});
   v("odometry", "fallback_turn_image_width_px", c.fallback.turn_image_width_px, Range{0, 100000});
   v("odometry", "fallback_turn_min_peak_ratio", c.fallback.turn_min_peak_ratio, Range{1.0, 1e9});
   v("odometry", "fallback_turn_half_turn_ratio", c.fallback.turn_half_turn_ratio, Range{1.0, 1e9});

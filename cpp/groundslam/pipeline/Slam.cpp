@@ -525,11 +525,14 @@ OdometryEdge Slam::estimateOdometry(const Keyframe& previous, const Keyframe& cu
   if (fit.ok() && repeated_floor && doubtedByTheSteps(fit, previous, current)) fit.status = FitStatus::implausible_motion;
   // Not in the paper: refused for its rivals or its speed on a repeated floor, the fit and its rivals are
   // judged by where the robot was going.
+  std::optional<Pose2> likeliest_motion;
   if (fit.status == FitStatus::ambiguous || fit.status == FitStatus::implausible_motion) {
-    if (auto chosen = fitByMotion(fit, used, previous, current)) {
-      fit = std::move(*chosen);
+    StepsChoice by_steps = fitByMotion(fit, used, previous, current);
+    if (by_steps.believed) {
+      fit = std::move(*by_steps.believed);
       result.inliers = fit.inliers;
     }
+    likeliest_motion = by_steps.likeliest;
   }
 
   // Too little evidence (not a motion refused for its rivals or its speed) where the overlap fell: a second look.
@@ -572,7 +575,7 @@ OdometryEdge Slam::estimateOdometry(const Keyframe& previous, const Keyframe& cu
     edge.unconfirmed = true;
     edge.covariance += sigmaCovariance(config_.odometry_checks.align_sigma_m, config_.odometry_checks.align_sigma_rad);
   }
-  return fit.ok() ? edge : fallbackOdometry(edge, measuredTurn(fit));
+  return fit.ok() ? edge : fallbackOdometry(edge, measuredTurn(fit), likeliest_motion);
 }
 
 std::vector<Match> Slam::withoutRobotArtifacts(std::vector<Match> matches, const Keyframe& previous, const Keyframe& current) const {
@@ -627,9 +630,9 @@ bool Slam::doubtedByTheSteps(const RigidEstimate& fit, const Keyframe& previous,
   return std::any_of(fit.rivals.begin(), fit.rivals.end(), [&](const Pose2& rival) { return prior.looseDoubtsOff(rival) < off; });
 }
 
-std::optional<RigidEstimate> Slam::fitByMotion(const RigidEstimate& fit, const std::vector<Match>& used,
-                                               const Keyframe& previous, const Keyframe& current) const {
-  if (config_.odometry_checks.repetition_max_steps <= 0 || !last_good_odometry_) return std::nullopt;
+Slam::StepsChoice Slam::fitByMotion(const RigidEstimate& fit, const std::vector<Match>& used, const Keyframe& previous,
+                                    const Keyframe& current) const {
+  if (config_.odometry_checks.repetition_max_steps <= 0 || !last_good_odometry_) return {};
   const MotionPrior prior = motionPrior(previous, current);
 
   // The candidates: the fit, its rival repetitions, and what the matches say near each motion the robot can
@@ -659,7 +662,10 @@ std::optional<RigidEstimate> Slam::fitByMotion(const RigidEstimate& fit, const s
   }
   // Alone, the fit is believed only where the turn shows how many steps the gap spans (one number of steps
   // turns by its angle besides a single step): driving straight, a repetition is some number of steps on too.
-  if (candidates.size() < 2 && prior.predictions(fit.T_target_source.theta).size() > 2) return std::nullopt;
+  if (candidates.size() < 2 && prior.predictions(fit.T_target_source.theta).size() > 2) {
+    if (!prior.likeliest({fit.T_target_source}, {fit.inliers})) return {};
+    return {std::nullopt, fit.T_target_source};
+  }
   // Each at its best on all the matches: its inliers are its support.
   std::vector<RigidEstimate> refined;
   std::vector<Pose2> motions;
@@ -670,8 +676,13 @@ std::optional<RigidEstimate> Slam::fitByMotion(const RigidEstimate& fit, const s
     support.push_back(refined.back().inliers);
   }
   const std::optional<size_t> chosen = prior.choose(motions, support);
-  if (!chosen || !refined[*chosen].ok()) return std::nullopt;
-  return refined[*chosen];
+  if (chosen && refined[*chosen].ok()) return {refined[*chosen], std::nullopt};
+  // None believed: the best supported candidate the steps allow is the likeliest motion, a lost frame's guess
+  // (measured on the seen outdoor sets' refused fits: within 5 mm of the truth for 63 of 106, the previous
+  // motion 30; more than 3 mm further off than the previous motion for none).
+  const std::optional<size_t> likeliest = prior.likeliest(motions, support);
+  if (!likeliest) return {};
+  return {std::nullopt, motions[*likeliest]};
 }
 
 std::vector<Pose2> Slam::usualSteps() const {
@@ -751,9 +762,10 @@ double Slam::rockingSteps(const OdometryEdge& odometry, double previous_time, do
   return steps;
 }
 
-OdometryEdge Slam::fallbackOdometry(OdometryEdge failed, std::optional<double> turn) const {
+OdometryEdge Slam::fallbackOdometry(OdometryEdge failed, std::optional<double> turn, std::optional<Pose2> likeliest) const {
   // The paper's code assumes the previous motion again; its uncertainty grows by the fallback sigmas. A turn the
-  // refused fit measured replaces the previous motion's.
+  // refused fit measured replaces the previous motion's; the likeliest of the refused fit's candidates, if any,
+  // replaces both.
   failed.fallback = true;
   failed.T_prev_curr = Pose2();
   failed.covariance = Eigen::Matrix3d::Zero();
@@ -763,6 +775,10 @@ OdometryEdge Slam::fallbackOdometry(OdometryEdge failed, std::optional<double> t
   }
   if (turn) failed.T_prev_curr = Pose2(failed.T_prev_curr.x, failed.T_prev_curr.y, *turn);
   failed.turn_measured = turn.has_value();
+  if (likeliest && config_.fallback.likeliest_motion) {
+    failed.T_prev_curr = *likeliest;
+    failed.turn_measured = true;
+  }
   failed.covariance += sigmaCovariance(config_.fallback.sigma_m, config_.fallback.sigma_rad);
   return failed;
 }

@@ -190,10 +190,17 @@ class Slam {
                            const FitSettings& settings) const;
   /// Matches split into still ones and the rest; when the rest fit a motion that moves the still ones, that fit.
   std::optional<RigidEstimate> fitWithoutStill(const StillSplit& split, const Keyframe& previous, const Keyframe& current) const;
+  /// What the robot's steps make of a refused fit: the candidate they clearly point to, believed; failing that,
+  /// the likeliest one, a guess for the assumed motion of a lost frame.
+  struct StepsChoice {
+    std::optional<RigidEstimate> believed;
+    std::optional<Pose2> likeliest;
+  };
   /// A fit refused as ambiguous or implausible, its rival transforms and the fits near the motions the robot
-  /// can have made: the one the robot's motion clearly points to (OdometryChecks::repetition_*), or none.
-  std::optional<RigidEstimate> fitByMotion(const RigidEstimate& fit, const std::vector<Match>& used, const Keyframe& previous,
-                                           const Keyframe& current) const;
+  /// can have made: the one the robot's motion clearly points to (OdometryChecks::repetition_*), or else the
+  /// best supported one within repetition_max_doubts of its steps (MotionPrior::likeliest).
+  StepsChoice fitByMotion(const RigidEstimate& fit, const std::vector<Match>& used, const Keyframe& previous,
+                          const Keyframe& current) const;
   /// The robot's motion between consecutive frames lately (core/MotionPrior.hpp).
   Pose2 usualStep() const;
   /// The steps the robot may be making now: the usual one, or right after a turn on the spot two (see MotionPrior).
@@ -239,7 +246,10 @@ class Slam {
   /// An accepted loop closure is a pair of views like any other, with a baseline of minutes instead of a
   /// frame: its factor ties the two frames' mounts across the run (the place must have kept its rays).
   void addLoopMountFactor(const LoopCandidate& loop, const Keyframe& current);
-  OdometryEdge fallbackOdometry(OdometryEdge failed, std::optional<double> turn = std::nullopt) const;
+  /// The motion assumed for a frame odometry could not measure: the previous one, turned by `turn` when measured,
+  /// or the refused fit's likeliest candidate (fallback.likeliest_motion).
+  OdometryEdge fallbackOdometry(OdometryEdge failed, std::optional<double> turn = std::nullopt,
+                                std::optional<Pose2> likeliest = std::nullopt) const;
   /// The turn of a fit refused for its rivals or its speed, when it still measures one (fallback.turn_min_inliers).
   std::optional<double> measuredTurn(const RigidEstimate& refused) const;
   /// A turn of the robot over a turn of its images (-1: the camera sees the ground mirrored).
