@@ -43,7 +43,8 @@ struct FallbackSettings {
   int turn_min_inliers = 25;
   /// Such a fit's likeliest motion replaces the assumed one, turn and translation: of the fit, its rivals and the
   /// fits near each motion the robot can have made, the one with the most inliers within repetition_max_doubts of
-  /// the robot's steps (frames dropped without a trace: several steps on). The frame stays lost.
+  /// the robot's steps, those whose turn the steps explain before one step with a sudden turn (frames dropped
+  /// without a trace: several steps on; MotionPrior::likeliest). The frame stays lost.
   bool likeliest_motion = true;
   /// Any other failed frame takes its turn from the images' spectra (core/SpectralTurn.hpp), the mean of the last
   /// `turn_background_frames` images taken away from both (what stays in the image: the robot's bumper, dirt on the
