@@ -422,6 +422,8 @@ void visitConfigFields(Config_& c, Visitor&& v) {
   v("loop_closure", "refine_by_tracked_points", c.loop_closure.refine_by_tracked_points, Range{});
   v("loop_closure", "tilt_sigma_deg", c.loop_closure.tilt_sigma_deg, kNonNegative);
   v("loop_closure", "remeasure_at_end", c.loop_closure.remeasure_at_end, Range{});
+  v("loop_closure", "lost_reach_m", c.loop_closure.lost_reach_m, kNonNegative);
+  v("loop_closure", "lost_reach_deg", c.loop_closure.lost_reach_deg, Range{0.0, 180.0});
   v("localization", "cell_m", c.localization.cell_m, Range{0.001, 0.1});
   v("localization", "cell_deg", c.localization.cell_deg, Range{0.5, 45.0});
   v("localization", "max_hamming", c.localization.max_hamming, Range{0, 256});

@@ -54,6 +54,8 @@ LoopCloser::LoopCloser(const LoopClosureSettings& settings, std::shared_ptr<cons
       fitting_(fitting) {
   fitting_.measure_ambiguity = true;
   fitting_.min_inliers = settings.min_inliers;
+  rejoin_fitting_ = fitting_;
+  rejoin_fitting_.rival_max_rotation_rad = 1.0 * M_PI / 180.0;
 }
 
 std::vector<LoopCandidate> LoopCloser::process(int frame, int segment, const GroundFeatures& features,
@@ -99,7 +101,7 @@ std::vector<LoopCandidate> LoopCloser::verifyCandidates(int frame, const GroundF
     // More loop edges of one frame add little to its pose: verification stops at max_accepted_per_frame.
     if (accepted >= settings_.max_accepted_per_frame) break;
     const TransformPrior prior = priorOf(match.frame, frame, estimates);
-    LoopCandidate candidate = verify(match.frame, places_.find(match.frame)->features(), frame, features, match.score, prior);
+    LoopCandidate candidate = verify(match.frame, places_.find(match.frame)->features(), frame, features, match.score, prior, fitting_);
     if (!std::isnan(candidate.covariance_score)) {
       candidate.correction_m = (candidate.T_a_b.translation() - prior.T_target_source.translation()).norm();
     }
@@ -187,7 +189,7 @@ TransformPrior LoopCloser::priorOf(int frame_a, int frame_b, const std::vector<P
 }
 
 LoopCandidate LoopCloser::verify(int frame_a, const GroundFeatures& a, int frame_b, const GroundFeatures& b,
-                                 double bow_score, const TransformPrior& prior) const {
+                                 double bow_score, const TransformPrior& prior, const FitSettings& fitting) const {
   LoopCandidate candidate;
   candidate.frame_a = frame_a;
   candidate.frame_b = frame_b;
@@ -220,7 +222,7 @@ LoopCandidate LoopCloser::verify(int frame_a, const GroundFeatures& a, int frame
     points_b.push_back(b.points[static_cast<size_t>(m.query)]);
   }
   // Gate 3: RANSAC considers only transforms the map can still believe (see priorOf).
-  const RigidEstimate fit = fitRigidTransform(points_a, points_b, fitting_, prior);
+  const RigidEstimate fit = fitRigidTransform(points_a, points_b, fitting, prior);
   candidate.inliers = fit.inliers;
   candidate.covariance_score = fit.ok() ? fit.covarianceScore() : std::numeric_limits<double>::infinity();
   candidate.T_a_b = fit.T_target_source;
@@ -305,7 +307,7 @@ std::vector<LoopCandidate> LoopCloser::relocalize(int frame, const GroundFeature
   AnchorFilter usable(feature_map_.anchors().size());
   for (size_t a = 0; a < usable.size(); ++a) usable[a] = feature_map_.anchors()[a].segment == kMapSegment;
   const Localization localization = localizeOnMap(features, usable);
-  if (!localization.ok() || onAnAnchorsPose(localization)) return {};
+  if (!localization.ok() || onAnAnchorsPose(localization)) return rejoinNearby(frame, features, estimates);
   // One localization could be a lookalike; the next must agree with what odometry measured in between.
   const PendingLocalization current{frame, localization};
   if (!pending_localization_ || segmentOf(pending_localization_->frame) != lost_segment ||
@@ -320,6 +322,57 @@ std::vector<LoopCandidate> LoopCloser::relocalize(int frame, const GroundFeature
   recent_loops_.emplace_back(joined.back().frame_a, frame);
   if (recent_loops_.size() > kRecentLoops) recent_loops_.pop_front();
   return joined;
+}
+
+bool LoopCloser::lostOnceSinceMap(int segment) const {
+  const auto first = std::find(segment_of_frame_.begin(), segment_of_frame_.end(), segment);
+  return first != segment_of_frame_.begin() && first != segment_of_frame_.end() && *(first - 1) == kMapSegment;
+}
+
+std::vector<LoopCandidate> LoopCloser::rejoinNearby(int frame, const GroundFeatures& features, const std::vector<Pose2>& estimates) {
+  // On a floor that repeats, a repetition lies within the reach of a few dropped frames; there only global
+  // localization, which compares every repetition, may join the segment. So does a segment lost twice over.
+  const int lost_segment = segmentOf(frame);
+  if (!(settings_.lost_reach_m > 0.0) || floor_repeats_ || pending_.empty() || pending_.back().frame != frame ||
+      !lostOnceSinceMap(lost_segment)) {
+    return {};
+  }
+  const Eigen::Vector2d here = estimates[static_cast<size_t>(frame)].translation();
+  std::vector<BowMatch> nearby;
+  for (const Place* place : places_.near(here, settings_.max_search_radius_m + settings_.lost_reach_m)) {
+    if (static_cast<int>(nearby.size()) >= settings_.max_nearby_places) break;
+    if (segmentOf(place->frame) != kMapSegment) continue;
+    const double reach = settings_.search_radius_m + settings_.lost_reach_m + settings_.max_disagreement_m +
+                         settings_.max_disagreement_per_m * driftPathLength(place->frame, frame);
+    if ((place->position - here).norm() <= reach) nearby.push_back({place->frame, bowScore(pending_.back().bow, place->bow)});
+  }
+  std::sort(nearby.begin(), nearby.end(), [](const BowMatch& x, const BowMatch& y) { return x.score > y.score || (x.score == y.score && x.frame < y.frame); });
+  if (static_cast<int>(nearby.size()) > settings_.max_candidates) nearby.resize(static_cast<size_t>(settings_.max_candidates));
+  for (const BowMatch& match : nearby) {
+    TransformPrior prior = priorOf(match.frame, frame, estimates);
+    prior.radius_m += settings_.lost_reach_m;
+    prior.radius_rad += settings_.lost_reach_deg * M_PI / 180.0;
+    LoopCandidate candidate = verify(match.frame, places_.find(match.frame)->features(), frame, features, match.score, prior, rejoin_fitting_);
+    if (!candidate.accepted()) continue;
+    candidate.correction_m = (candidate.T_a_b.translation() - prior.T_target_source.translation()).norm();
+    // As for a global localization: the next accepted one must agree with what odometry measured in between.
+    const std::optional<LoopCandidate> earlier = pending_rejoin_;
+    pending_rejoin_ = candidate;
+    if (!earlier || segmentOf(earlier->frame_b) != lost_segment) return {};
+    const Pose2 by_loops = between(estimates[static_cast<size_t>(earlier->frame_a)] * earlier->T_a_b,
+                                   estimates[static_cast<size_t>(candidate.frame_a)] * candidate.T_a_b);
+    const Pose2 disagreement = between(estimates[static_cast<size_t>(earlier->frame_b)], estimates[static_cast<size_t>(frame)]).inverse() * by_loops;
+    if (disagreement.translation().norm() > localization_.max_odometry_disagreement_m ||
+        std::abs(disagreement.theta) > localization_.max_odometry_disagreement_rad) {
+      return {};
+    }
+    pending_rejoin_.reset();
+    joinSegments(lost_segment, kMapSegment);
+    recent_loops_.emplace_back(candidate.frame_a, frame);
+    if (recent_loops_.size() > kRecentLoops) recent_loops_.pop_front();
+    return {*earlier, candidate};
+  }
+  return {};
 }
 
 std::vector<LoopCandidate> LoopCloser::joinOrphanSegments(const std::vector<Pose2>& estimates) {

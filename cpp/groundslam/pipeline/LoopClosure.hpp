@@ -61,6 +61,12 @@ struct LoopClosureSettings {
   /// How far a frame's estimated tilt is off (degrees, each of roll and pitch): its effect on a refined loop's
   /// transform, which the tracked points' own residuals do not show, is added to the loop's covariance.
   double tilt_sigma_deg = 0.2;
+  /// Not in the paper: while tracking is lost on a floor that does not repeat, a lost frame whose global localization
+  /// failed is also verified, as a loop closure is, against the map's places near its estimate, which the unknown
+  /// motion at the loss (frames dropped, a turn) may have moved by up to lost_reach_m and lost_reach_deg more than
+  /// drift would. Two such frames must agree with odometry before the segment joins the map. 0: off.
+  double lost_reach_m = 0.08;
+  double lost_reach_deg = 20.0;
   /// Not in the paper: once the mounts are solved over the whole run (outdoor.smooth_mount), every loop is fitted
   /// again through its frames' final mounts and the graph optimised again (pipeline/SlamLoopRefinement.cpp).
   bool remeasure_at_end = true;
@@ -100,6 +106,8 @@ class LoopCloser {
   /// another lost segment has a frame of its own and cannot place this one). A localization is accepted
   /// when the next one agrees with odometry; then both are returned as loop candidates (frame_a: the map
   /// keyframe, frame_b: the lost frame) and the frame's segment joins the map segment.
+  /// When global localization fails, the frame is verified against the map's places near its estimate instead
+  /// (LoopClosureSettings::lost_reach_m), with the same confirmation by the next accepted one.
   std::vector<LoopCandidate> relocalize(int frame, const GroundFeatures& features, const std::vector<Pose2>& estimates);
   /// After a lost segment joined the map: the segments lost before it that never joined (tracking was lost
   /// again first) are localized on the map now, which may have grown onto their ground. A segment joins when
@@ -153,7 +161,7 @@ class LoopCloser {
   /// Lets the frames waiting up to `last` into the database and the feature map.
   void admitPlaces(int last, const std::vector<Pose2>& estimates);
   LoopCandidate verify(int frame_a, const GroundFeatures& a, int frame_b, const GroundFeatures& b, double bow_score,
-                       const TransformPrior& prior) const;
+                       const TransformPrior& prior, const FitSettings& fitting) const;
   /// The estimated T_a_b and how far drift since the last correction may have moved it.
   TransformPrior priorOf(int frame_a, int frame_b, const std::vector<Pose2>& estimates) const;
   /// The path length over which the estimate of T_a_b could have drifted: between a and b, or through
@@ -166,6 +174,10 @@ class LoopCloser {
     Localization localization;
   };
   LoopCandidate candidateFrom(const Localization& localization, int frame) const;
+  /// The lost frame against the map's places near its estimate, within the reach of the loss's unknown motion.
+  std::vector<LoopCandidate> rejoinNearby(int frame, const GroundFeatures& features, const std::vector<Pose2>& estimates);
+  /// The segment began right after a frame of the map segment: one unknown motion lies between them.
+  bool lostOnceSinceMap(int segment) const;
   /// Two localizations of one segment's frames agree with what its odometry measured between them.
   bool agreeWithOdometry(const PendingLocalization& a, const PendingLocalization& b, const std::vector<Pose2>& estimates) const;
   /// A localization on a map keyframe's own pose (LocalizationSettings::min_anchor_offset_*): camera artifacts.
@@ -179,9 +191,13 @@ class LoopCloser {
   FeatureMap feature_map_;
   std::vector<int> segment_of_frame_;
   std::optional<PendingLocalization> pending_localization_;
+  std::optional<LoopCandidate> pending_rejoin_;  ///< an accepted nearby verification, waiting for the next to agree
   bool floor_repeats_ = false;
   double matching_ratio_;
   FitSettings fitting_;
+  /// For a lost frame against the map near its estimate: only shifted copies of the fit are its rivals. Over the
+  /// narrow strip two footprints share after a gap, the fit turned by a few degrees about it explains nearly as many.
+  FitSettings rejoin_fitting_;
   PlaceMap places_;
   std::deque<Pending> pending_;        ///< the last k frames, not yet in the map
   std::vector<double> path_length_m_;  ///< estimated distance driven up to each frame
