@@ -324,30 +324,31 @@ std::vector<LoopCandidate> LoopCloser::relocalize(int frame, const GroundFeature
   return joined;
 }
 
-bool LoopCloser::lostOnceSinceMap(int segment) const {
+bool LoopCloser::lostFromTheMap(int segment) const {
   const auto first = std::find(segment_of_frame_.begin(), segment_of_frame_.end(), segment);
   return first != segment_of_frame_.begin() && first != segment_of_frame_.end() && *(first - 1) == kMapSegment;
 }
 
 std::vector<LoopCandidate> LoopCloser::rejoinNearby(int frame, const GroundFeatures& features, const std::vector<Pose2>& estimates) {
   // On a floor that repeats, a repetition lies within the reach of a few dropped frames; there only global
-  // localization, which compares every repetition, may join the segment. So does a segment lost twice over.
+  // localization, which compares every repetition, may join the segment. So does a segment lost again before it was
+  // found: two unknown motions lie between it and the map.
   const int lost_segment = segmentOf(frame);
   if (!(settings_.lost_reach_m > 0.0) || floor_repeats_ || pending_.empty() || pending_.back().frame != frame ||
-      !lostOnceSinceMap(lost_segment)) {
+      !lostFromTheMap(lost_segment)) {
     return {};
   }
+  // The nearest places first, not the best BoW scores: where the robot was lost (a weak floor, the robot's own
+  // shadow) the scores hardly differ, and the estimate is off by a few steps only.
   const Eigen::Vector2d here = estimates[static_cast<size_t>(frame)].translation();
   std::vector<BowMatch> nearby;
   for (const Place* place : places_.near(here, settings_.max_search_radius_m + settings_.lost_reach_m)) {
-    if (static_cast<int>(nearby.size()) >= settings_.max_nearby_places) break;
+    if (static_cast<int>(nearby.size()) >= 2 * settings_.max_candidates) break;
     if (segmentOf(place->frame) != kMapSegment) continue;
     const double reach = settings_.search_radius_m + settings_.lost_reach_m + settings_.max_disagreement_m +
                          settings_.max_disagreement_per_m * driftPathLength(place->frame, frame);
     if ((place->position - here).norm() <= reach) nearby.push_back({place->frame, bowScore(pending_.back().bow, place->bow)});
   }
-  std::sort(nearby.begin(), nearby.end(), [](const BowMatch& x, const BowMatch& y) { return x.score > y.score || (x.score == y.score && x.frame < y.frame); });
-  if (static_cast<int>(nearby.size()) > settings_.max_candidates) nearby.resize(static_cast<size_t>(settings_.max_candidates));
   for (const BowMatch& match : nearby) {
     TransformPrior prior = priorOf(match.frame, frame, estimates);
     prior.radius_m += settings_.lost_reach_m;

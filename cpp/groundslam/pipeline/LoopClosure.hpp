@@ -64,7 +64,8 @@ struct LoopClosureSettings {
   /// Not in the paper: while tracking is lost on a floor that does not repeat, a lost frame whose global localization
   /// failed is also verified, as a loop closure is, against the map's places near its estimate, which the unknown
   /// motion at the loss (frames dropped, a turn) may have moved by up to lost_reach_m and lost_reach_deg more than
-  /// drift would. Two such frames must agree with odometry before the segment joins the map. 0: off.
+  /// drift would. Only for a segment lost right after a frame of the map. Two such frames must agree with odometry
+  /// before the segment joins the map. 0: off.
   double lost_reach_m = 0.08;
   double lost_reach_deg = 20.0;
   /// Not in the paper: once the mounts are solved over the whole run (outdoor.smooth_mount), every loop is fitted
@@ -177,7 +178,7 @@ class LoopCloser {
   /// The lost frame against the map's places near its estimate, within the reach of the loss's unknown motion.
   std::vector<LoopCandidate> rejoinNearby(int frame, const GroundFeatures& features, const std::vector<Pose2>& estimates);
   /// The segment began right after a frame of the map segment: one unknown motion lies between them.
-  bool lostOnceSinceMap(int segment) const;
+  bool lostFromTheMap(int segment) const;
   /// Two localizations of one segment's frames agree with what its odometry measured between them.
   bool agreeWithOdometry(const PendingLocalization& a, const PendingLocalization& b, const std::vector<Pose2>& estimates) const;
   /// A localization on a map keyframe's own pose (LocalizationSettings::min_anchor_offset_*): camera artifacts.
