@@ -315,7 +315,8 @@ TEST(Relocalization, AMotionRefusedForItsSpeedIsBridgedToTheLastTrackedFrame) {
 
 TEST(Relocalization, ALossInsideALostSegmentIsBridgedToThatSegmentNotLeftAdrift) {
   // Carried 80 cm away (frames 250-329 never seen) with global localization kept out (a weak floor where it finds
-  // nothing): from frame 330 the robot is lost, its segment measured by odometry. Then a blank frame (340) and two
+  // nothing), and the map's places near the lost frames too (loop_closure.lost_reach_m 0): from frame 330 the robot
+  // is lost, its segment measured by odometry. Then a blank frame (340) and two
   // frames dropped (341, 342): frame 343 cannot be measured against the blank one, and is measured against frame
   // 339 of the lost segment instead, which the new segment then continues. Without the bridge (bridge_max_frames 0)
   // the motion 339 -> 343 is a guess, one usual step a frame shown: two steps short.
