@@ -360,13 +360,12 @@ std::vector<LoopCandidate> LoopCloser::rejoinNearby(int frame, const GroundFeatu
     const std::optional<LoopCandidate> earlier = pending_rejoin_;
     pending_rejoin_ = candidate;
     if (!earlier || segmentOf(earlier->frame_b) != lost_segment) return {};
-    const Pose2 by_loops = between(estimates[static_cast<size_t>(earlier->frame_a)] * earlier->T_a_b,
-                                   estimates[static_cast<size_t>(candidate.frame_a)] * candidate.T_a_b);
-    const Pose2 disagreement = between(estimates[static_cast<size_t>(earlier->frame_b)], estimates[static_cast<size_t>(frame)]).inverse() * by_loops;
-    if (disagreement.translation().norm() > localization_.max_odometry_disagreement_m ||
-        std::abs(disagreement.theta) > localization_.max_odometry_disagreement_rad) {
-      return {};
-    }
+    const auto placed = [&](const LoopCandidate& c) {
+      PendingLocalization p{c.frame_b, {}};
+      p.localization.T_map_robot = estimates[static_cast<size_t>(c.frame_a)] * c.T_a_b;
+      return p;
+    };
+    if (!agreeWithOdometry(placed(*earlier), placed(candidate), estimates)) return {};
     pending_rejoin_.reset();
     joinSegments(lost_segment, kMapSegment);
     recent_loops_.emplace_back(candidate.frame_a, frame);
