@@ -91,3 +91,36 @@ TEST(SpectralTurn, ThePhaseCorrelationTellsTheRightHalfTurn) {
   EXPECT_GT(right, 0.2);
   EXPECT_EQ(phasePeakAfterTurn(cv::Mat(), cv::Mat(), 0.0), 0.0);
 }
+
+namespace {
+
+/// Where the ground seen at `current_px` in view(floor, offset, turn_deg) is seen in view(floor, {0, 0}, 0).
+cv::Point2d seenBefore(const cv::Mat& floor, cv::Point2f offset, double turn_deg, cv::Point2d current_px) {
+  const cv::Point2d centre(0.5 * floor.cols + offset.x, 0.5 * floor.rows + offset.y);
+  // view(): pixel = R(turn) (ground - centre) + (160, 120), R counterclockwise as displayed (y down).
+  const double c = std::cos(turn_deg * kDeg), s = std::sin(turn_deg * kDeg);
+  const cv::Point2d d = current_px - cv::Point2d(160.0, 120.0);
+  const cv::Point2d ground = centre + cv::Point2d(c * d.x - s * d.y, s * d.x + c * d.y);
+  return ground - cv::Point2d(0.5 * floor.cols, 0.5 * floor.rows) + cv::Point2d(160.0, 120.0);
+}
+
+}  // namespace
+
+TEST(SpectralTurn, WithTheTurnKnownThePhaseCorrelationGivesTheShift) {
+  const cv::Mat floor = grainyFloor(900, 1.5, 12);
+  const cv::Mat previous = view(floor, {0, 0}, 0.0);
+  for (const double turn_deg : {-90.0, -17.0, 0.0, 76.0}) {
+    const cv::Point2f offset(18.0f, -41.0f);
+    const cv::Mat current = view(floor, offset, turn_deg);
+    const TurnAndShift found = shiftAfterTurn(previous, current, turn_deg * kDeg);
+    EXPECT_GT(found.response, 0.2) << turn_deg;
+    // Every corner of the view and its centre land where the ground they show was seen: the turn is exact here,
+    // so within the phase correlation's fraction of a pixel.
+    for (const cv::Point2d p : {cv::Point2d(160, 120), cv::Point2d(0, 0), cv::Point2d(319, 0), cv::Point2d(0, 239), cv::Point2d(319, 239)}) {
+      const cv::Vec2d mapped = found.W_previous_current * cv::Vec3d(p.x, p.y, 1.0);
+      const cv::Point2d expected = seenBefore(floor, offset, turn_deg, p);
+      EXPECT_LT(std::hypot(mapped[0] - expected.x, mapped[1] - expected.y), 0.5) << turn_deg << " at " << p;
+    }
+  }
+  EXPECT_EQ(shiftAfterTurn(cv::Mat(), cv::Mat(), 0.0).response, 0.0);
+}

@@ -82,9 +82,14 @@ SpectralTurn spectralTurn(const cv::Mat& previous, const cv::Mat& current, const
 }
 
 double phasePeakAfterTurn(const cv::Mat& previous, const cv::Mat& current, double turn_rad) {
+  return shiftAfterTurn(previous, current, turn_rad).response;
+}
+
+TurnAndShift shiftAfterTurn(const cv::Mat& previous, const cv::Mat& current, double turn_rad) {
+  TurnAndShift result;
   if (previous.empty() || previous.size() != current.size() || previous.channels() != 1 || current.channels() != 1 ||
       std::min(previous.cols, previous.rows) < 16) {
-    return 0.0;
+    return result;
   }
   const int side = std::min(previous.cols, previous.rows);
   const cv::Rect square((previous.cols - side) / 2, (previous.rows - side) / 2, side, side);
@@ -93,16 +98,26 @@ double phasePeakAfterTurn(const cv::Mat& previous, const cv::Mat& current, doubl
   current.convertTo(b, CV_64F);
   // OpenCV's positive angle turns counterclockwise as displayed: the current image is turned back.
   const cv::Point2f centre(0.5f * static_cast<float>(b.cols - 1), 0.5f * static_cast<float>(b.rows - 1));
-  cv::warpAffine(b, turned_back, cv::getRotationMatrix2D(centre, -turn_rad * 180.0 / M_PI, 1.0), b.size(), cv::INTER_LINEAR,
-                 cv::BORDER_CONSTANT, cv::Scalar(cv::mean(b)[0]));
+  const cv::Mat turn_back = cv::getRotationMatrix2D(centre, -turn_rad * 180.0 / M_PI, 1.0);
+  cv::warpAffine(b, turned_back, turn_back, b.size(), cv::INTER_LINEAR, cv::BORDER_CONSTANT, cv::Scalar(cv::mean(b)[0]));
   turned_back = turned_back(square).clone();
   a -= cv::mean(a)[0];
   turned_back -= cv::mean(turned_back)[0];
   cv::Mat window;
   cv::createHanningWindow(window, a.size(), CV_64F);
   double response = 0.0;
-  cv::phaseCorrelate(a, turned_back, window, &response);
-  return std::isfinite(response) ? response : 0.0;
+  const cv::Point2d shift = cv::phaseCorrelate(a, turned_back, window, &response);
+  if (!std::isfinite(response)) return result;
+  // The turned-back image shows at p what the previous one shows at p - shift (both squares cut at one place).
+  cv::Matx23d W;
+  for (int r = 0; r < 2; ++r) {
+    for (int c = 0; c < 3; ++c) W(r, c) = turn_back.at<double>(r, c);
+  }
+  W(0, 2) -= shift.x;
+  W(1, 2) -= shift.y;
+  result.W_previous_current = W;
+  result.response = response;
+  return result;
 }
 
 }  // namespace groundslam

@@ -34,4 +34,13 @@ SpectralTurn spectralTurn(const cv::Mat& previous, const cv::Mat& current, const
 /// Of spectralTurn's two turns, half a turn apart, the right one's is clearly the higher.
 double phasePeakAfterTurn(const cv::Mat& previous, const cv::Mat& current, double turn_rad);
 
+/// The rest of Fourier-Mellin registration: with the turn known, the translation from the phase correlation.
+struct TurnAndShift {
+  /// A pixel of `current` to where it is seen in `previous` (pixels of these images): the turn undone about the
+  /// image centre, then the shift.
+  cv::Matx23d W_previous_current = cv::Matx23d::eye();
+  double response = 0.0;  ///< the phase correlation's peak (0..1), as phasePeakAfterTurn
+};
+TurnAndShift shiftAfterTurn(const cv::Mat& previous, const cv::Mat& current, double turn_rad);
+
 }  // namespace groundslam

@@ -205,6 +205,11 @@ struct OdometryChecks {
   int bridge_search_max_hamming = 80;     ///< a pair further apart is no match, bits
   double bridge_search_agreement_m = 0.01;   ///< two frames' searched motions agree within this,
   double bridge_search_agreement_deg = 2.0;  ///< and this
+  /// Where the search finds nothing too, the bridging frame's image is registered with the last tracked one's by
+  /// their spectra (the turn, core/SpectralTurn.hpp, then the shift from the phase correlation; Fourier-Mellin
+  /// registration), both less the mean of the recent images. Believed, as the search is, once two frames agree;
+  /// each must have a phase correlation peak of at least this, and twice the other half-turn's. 0: off.
+  double bridge_spectral_min_peak = 0.15;
 };
 
 /// Outdoors and on real robots: features that stay still in the image, and the camera's tilt and height per
@@ -391,6 +396,7 @@ void visitConfigFields(Config_& c, Visitor&& v) {
   v("odometry", "bridge_search_max_hamming", c.odometry_checks.bridge_search_max_hamming, Range{0, 256});
   v("odometry", "bridge_search_agreement_m", c.odometry_checks.bridge_search_agreement_m, kPositive);
   v("odometry", "bridge_search_agreement_deg", c.odometry_checks.bridge_search_agreement_deg, kPositive);
+  v("odometry", "bridge_spectral_min_peak", c.odometry_checks.bridge_spectral_min_peak, Range{0.0, 1.0});
   v("odometry", "fallback_sigma_m", c.fallback.sigma_m, kPositive);
   v("odometry", "fallback_sigma_rad", c.fallback.sigma_rad, kPositive);
   v("odometry", "fallback_turn_min_inliers", c.fallback.turn_min_inliers, Range{0, 1000000});

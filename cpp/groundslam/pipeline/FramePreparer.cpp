@@ -56,7 +56,11 @@ PreparedFrame FramePreparer::prepare(const cv::Mat& image, double timestamp, int
   if (alignment_) prepared.alignment = alignmentImage(image, *alignment_, reduced_by);
   if (tracking_) prepared.tracking = trackingImage(image, *tracking_, reduced_by);
   if (heading_) prepared.heading = alignmentImage(image, *heading_, reduced_by);
-  if (turn_width_px_ > 0) prepared.turn = reduceByWholeFactor(image, turn_width_px_).pixels;
+  if (turn_width_px_ > 0) {
+    ReducedImage turn = reduceByWholeFactor(image, turn_width_px_);
+    prepared.turn = std::move(turn.pixels);
+    prepared.turn_scale = static_cast<double>(turn.factor) * std::max(1, reduced_by);
+  }
   prepared.project_ms = timer.lap();
   return prepared;
 }

@@ -41,6 +41,7 @@ struct PreparedFrame {
   /// The image reduced for measuring a failed frame's turn from its spectrum (odometry.fallback_turn_image_width_px;
   /// CV_32F, empty when 0).
   cv::Mat turn;
+  double turn_scale = 1.0;  ///< original image pixels per pixel of `turn` (the decoder's and this reduction)
 };
 
 /// The alignment settings a configuration describes (odometry.align_*).

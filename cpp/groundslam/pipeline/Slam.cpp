@@ -180,7 +180,7 @@ FrameResult Slam::process(PreparedFrame prepared) {
   keepPlaceTracking(frame, prepared.tracking);
   if (lost_) {
     relocalize(ground, result);
-    if (lost_) bridgeLoss(current, prepared.alignment, result);
+    if (lost_) bridgeLoss(current, prepared, result);
   } else if (prior_frames_ > 0) closeLoopsOnPriorMap(ground, result);
   optimiseIfDue(result, false);
   // Once the map holds the segment just found in place: segments lost again before they were found may lie on its
@@ -199,6 +199,7 @@ FrameResult Slam::process(PreparedFrame prepared) {
   if ((!lost_ && measured_.back()) || in_lost_segment) {
     tracked_keyframe_ = previous_;
     tracked_alignment_ = prepared.alignment;  // shares the pixels: neither is changed
+    tracked_turn_image_ = prepared.turn;
     tracked_frame_ = frame;
     tracked_time_ = prepared.timestamp;
     tracked_segment_ = lost_ ? segment_ : kMapSegment;

@@ -151,7 +151,7 @@ class Slam {
   /// the last tracked one joins the segment to the map, as a relocalization would (the map may not reach where the
   /// robot goes, and weak floors give global localization too little); when that frame is of a lost segment, the
   /// new segment continues that one instead. By its features first, else by its image.
-  void bridgeLoss(const Keyframe& current, const AlignmentImage& alignment, FrameResult& result);
+  void bridgeLoss(const Keyframe& current, const PreparedFrame& prepared, FrameResult& result);
   /// A motion from the last tracked frame to the current one, and its covariance.
   struct Bridge {
     Pose2 T_tracked_current;
@@ -167,7 +167,9 @@ class Slam {
   /// A searched bridge once an earlier frame's, carried forward by the lost segment's odometry, agrees with it
   /// (that one's edge is added then); until then the search waits in pending_search_ (cleared when a segment starts
   /// or joins the map).
-  std::optional<Bridge> confirmedSearch(const Keyframe& current);
+  std::optional<Bridge> confirmedSearch(const Keyframe& current, const PreparedFrame& prepared);
+  /// The current image registered with the last tracked frame's by their spectra (odometry.bridge_spectral_min_peak).
+  std::optional<Bridge> bridgeBySpectra(const cv::Mat& turn_image, double turn_scale) const;
   /// The current segment joins the map (a relocalization): its frames count as measured, the graph is optimised.
   void joinMap(FrameResult& result);
   /// Lost segments that never joined the map are localized on it (after a segment joined it and was optimised in
@@ -258,6 +260,8 @@ class Slam {
   void turnBySpectra(OdometryEdge& failed, const cv::Mat& turn_image) const;
   /// The mean of the recent turn images, which turnBySpectra takes away: what stays in the image.
   void keepTurnImage(cv::Mat turn_image);
+  /// Two images show about as much contrast as each other (a blank or covered one shows no motion).
+  static bool comparableContrast(const cv::Mat& a, const cv::Mat& b);
   /// False when the motion's translation is far from the last good motion's, scaled to the time between frames
   /// (config odometry.max_velocity_change_*).
   bool plausibleMotion(const Pose2& T_prev_curr, double previous_time, double current_time) const;
@@ -390,6 +394,7 @@ class Slam {
   std::map<int, TrackingImage> place_tracking_;  ///< graph frame -> its tracking image, for places and frames still pending
   std::deque<int> pending_place_tracking_;       ///< frames whose image is kept until it is known whether they became places
   std::vector<LoopRays> loop_rays_;              ///< every loop closed during the run, for remeasureLoops
+  cv::Mat tracked_turn_image_;         ///< the last tracked frame's image as bridgeBySpectra uses it
   AlignmentImage tracked_alignment_;   ///< the last tracked frame's image, keyframe, graph index and time (bridgeLoss)
   std::optional<Keyframe> tracked_keyframe_;  ///< its features as projected with its mount (bridgeByFeatures)
   int tracked_frame_ = -1;

@@ -5,13 +5,15 @@
 #include <optional>
 #include <vector>
 
+#include "groundslam/core/ImageAlignment.hpp"
 #include "groundslam/core/MotionSearch.hpp"
+#include "groundslam/core/SpectralTurn.hpp"
 #include "groundslam/pipeline/Slam.hpp"
 #include "groundslam/pipeline/StageTimer.hpp"
 
 namespace groundslam {
 
-void Slam::bridgeLoss(const Keyframe& current, const AlignmentImage& alignment, FrameResult& result) {
+void Slam::bridgeLoss(const Keyframe& current, const PreparedFrame& prepared, FrameResult& result) {
   const int frames_since = current.index - tracked_frame_;
   // Only a loss for too little evidence (one blurred or covered image, a patch of smooth floor) or for the robot's
   // speed (frames dropped without a trace), on a floor that does not repeat: there a motion spanning the lost frames
@@ -25,9 +27,9 @@ void Slam::bridgeLoss(const Keyframe& current, const AlignmentImage& alignment, 
   // The loss frame itself has just failed against the last tracked frame: only the search can say more of it.
   if (frames_since >= 2) {
     bridge = bridgeByFeatures(current);
-    if (!bridge) bridge = bridgeByAlignment(current, alignment);
+    if (!bridge) bridge = bridgeByAlignment(current, prepared.alignment);
   }
-  if (!bridge) bridge = confirmedSearch(current);
+  if (!bridge) bridge = confirmedSearch(current, prepared);
   result.times.loop_ms += timer.lap();
   if (!bridge) return;
   graph_.addEdge({tracked_frame_, current.index, bridge->T_tracked_current,
@@ -108,8 +110,9 @@ std::optional<Slam::Bridge> Slam::bridgeBySearch(const Keyframe& current) const 
   return Bridge{found->fit.T_target_source, found->fit.covariance};
 }
 
-std::optional<Slam::Bridge> Slam::confirmedSearch(const Keyframe& current) {
-  const std::optional<Bridge> found = bridgeBySearch(current);
+std::optional<Slam::Bridge> Slam::confirmedSearch(const Keyframe& current, const PreparedFrame& prepared) {
+  std::optional<Bridge> found = bridgeBySearch(current);
+  if (!found) found = bridgeBySpectra(prepared.turn, prepared.turn_scale);
   if (!found) return std::nullopt;
   const std::optional<PendingBridge> earlier = pending_search_;
   pending_search_ = PendingBridge{current.index, *found};
@@ -132,6 +135,36 @@ std::optional<Slam::Bridge> Slam::confirmedSearch(const Keyframe& current) {
   graph_.addEdge({tracked_frame_, earlier->frame, earlier->bridge.T_tracked_current,
                   informationFrom(earlier->bridge.covariance, config_.graph.min_sigma_m, config_.graph.min_sigma_rad), true});
   return found;
+}
+
+std::optional<Slam::Bridge> Slam::bridgeBySpectra(const cv::Mat& turn_image, double turn_scale) const {
+  const double min_peak = config_.odometry_checks.bridge_spectral_min_peak;
+  if (!(min_peak > 0.0) || turn_image.empty() || tracked_turn_image_.size() != turn_image.size() ||
+      turn_background_.size() != turn_image.size() || !comparableContrast(tracked_turn_image_, turn_image)) {
+    return std::nullopt;
+  }
+  // What stays in the image (the robot's shadow, bumper, lens dirt, vignetting) is the mean of the recent images.
+  const cv::Mat tracked = tracked_turn_image_ - turn_background_, current = turn_image - turn_background_;
+  const SpectralTurn turn = spectralTurn(tracked, current);
+  if (!(turn.peak_ratio > 0.0)) return std::nullopt;
+  // The spectra tell the turn up to half a turn: the right one, undone, leaves the images matching by a shift. That
+  // match is the test: not how clearly the spectra chose the turn (a shifted image's spectrum changes too).
+  const TurnAndShift one = shiftAfterTurn(tracked, current, turn.turn_rad), other = shiftAfterTurn(tracked, current, turn.turn_rad + M_PI);
+  const TurnAndShift& best = one.response >= other.response ? one : other;
+  const double other_peak = std::min(one.response, other.response);
+  if (best.response < min_peak || best.response < config_.fallback.turn_half_turn_ratio * other_peak) return std::nullopt;
+  // At rest, it is what the mean of the recent images did not take away (a shadow's edge that turned) that matched.
+  const cv::Matx23d W = toOriginalPixels(best.W_previous_current, turn_scale);
+  const double w = turn_scale * turn_image.cols, h = turn_scale * turn_image.rows;
+  double moved_px = 0.0;
+  for (const cv::Vec3d& corner : {cv::Vec3d(0, 0, 1), cv::Vec3d(w, 0, 1), cv::Vec3d(0, h, 1), cv::Vec3d(w, h, 1)}) {
+    const cv::Vec2d seen_before = W * corner;
+    moved_px = std::max(moved_px, std::hypot(seen_before[0] - corner[0], seen_before[1] - corner[1]));
+  }
+  if (moved_px < config_.outdoor.moved_factor * config_.outdoor.still_radius_px) return std::nullopt;
+  const Pose2 T_tracked_current = groundMotionOf(W);
+  const OdometryChecks& checks = config_.odometry_checks;
+  return Bridge{T_tracked_current, sigmaCovariance(checks.align_sigma_m, checks.align_sigma_rad)};
 }
 
 }  // namespace groundslam

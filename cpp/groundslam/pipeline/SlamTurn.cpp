@@ -30,10 +30,7 @@ void Slam::turnBySpectra(OdometryEdge& failed, const cv::Mat& turn_image) const 
   }
   // A blank or covered image shows no turn. (Less the mean of the recent images, it would show that mean's, shared
   // with the other image's difference: no turn.) Both must show about as much contrast as each other.
-  cv::Scalar mean, deviation_previous, deviation_current;
-  cv::meanStdDev(previous_turn_image_, mean, deviation_previous);
-  cv::meanStdDev(turn_image, mean, deviation_current);
-  if (std::min(deviation_previous[0], deviation_current[0]) < 0.5 * std::max(deviation_previous[0], deviation_current[0])) return;
+  if (!comparableContrast(previous_turn_image_, turn_image)) return;
   // What stays in the image (the robot's bumper, lens dirt, vignetting) would say the robot did not turn: the mean of
   // the recent images, where the moving ground blurs away, takes it out of both.
   const cv::Mat previous = previous_turn_image_ - turn_background_, current = turn_image - turn_background_;
@@ -58,6 +55,13 @@ void Slam::turnBySpectra(OdometryEdge& failed, const cv::Mat& turn_image) const 
   }
   failed.T_prev_curr = Pose2(failed.T_prev_curr.x, failed.T_prev_curr.y, chosen);
   failed.turn_measured = true;
+}
+
+bool Slam::comparableContrast(const cv::Mat& a, const cv::Mat& b) {
+  cv::Scalar mean, deviation_a, deviation_b;
+  cv::meanStdDev(a, mean, deviation_a);
+  cv::meanStdDev(b, mean, deviation_b);
+  return std::min(deviation_a[0], deviation_b[0]) >= 0.5 * std::max(deviation_a[0], deviation_b[0]);
 }
 
 void Slam::keepTurnImage(cv::Mat turn_image) {
