@@ -164,9 +164,9 @@ class Slam {
   /// The current frame's motion from the last tracked frame, searched among the motions the robot can have made
   /// at the loss frame (core/MotionSearch.hpp, odometry.bridge_search_*) followed by the lost segment's odometry.
   std::optional<Bridge> bridgeBySearch(const Keyframe& current) const;
-  /// A searched bridge once an earlier frame's, carried forward by the lost segment's odometry, agrees with it
-  /// (that one's edge is added then); until then the search waits in pending_search_ (cleared when a segment starts
-  /// or joins the map).
+  /// A searched (else spectrally registered) bridge once an earlier frame's, carried forward by the lost segment's
+  /// odometry, agrees with it (that one's edge is added then); until then it waits in pending_search_ (cleared when a
+  /// segment starts or joins the map).
   std::optional<Bridge> confirmedSearch(const Keyframe& current, const PreparedFrame& prepared);
   /// The current image registered with the last tracked frame's by their spectra (odometry.bridge_spectral_min_peak).
   std::optional<Bridge> bridgeBySpectra(const cv::Mat& turn_image, double turn_scale) const;
