@@ -2,6 +2,7 @@
 // session (other path, other noise) over the same ground.
 #include <chrono>
 #include <cmath>
+#include <functional>
 #include <cstdio>
 
 #include <gtest/gtest.h>
@@ -388,6 +389,35 @@ TEST(Relocalization, ASegmentLostAgainBeforeItWasFoundJoinsWithTheNextOne) {
   EXPECT_LT((placed.translation() - true_motion.translation()).norm(), 0.005);
 }
 
+namespace {
+
+/// The quarter turn of the next two tests: the carpet loop under the outdoor look with a turn on the spot every 80
+/// frames, frame 3 dropped; its first 46 frames run with a configuration `tweak` has changed.
+struct QuarterTurnOnCarpet {
+  static sim::SimulationSettings settings() {
+    sim::SimulationSettings s = carpetLoopUnderTheOutdoorLook(23);
+    s.motion.spin_every = 80;
+    return s;
+  }
+  static int image(int position) { return position < 3 ? position : position + 1; }  // frame 3 dropped
+  /// The true motion between two of the run's frames.
+  Pose2 trueMotion(int from, int to) const {
+    return between(simulator.groundTruth()[size_t(image(from))], simulator.groundTruth()[size_t(image(to))]);
+  }
+  Trajectory run(const std::function<void(Config&)>& tweak, std::vector<FrameStatus>& status) const {
+    Config config = configFor(s);
+    tweak(config);
+    Slam slam(config, shippedVocabulary());
+    for (int k = 0; k < 46; ++k) status.push_back(slam.process(simulator.renderFrame(image(k)), k).status);
+    slam.finish();
+    return slam.trajectory();
+  }
+  const sim::SimulationSettings s = settings();
+  const sim::SequenceSimulator simulator{s};
+};
+
+}  // namespace
+
 TEST(Relocalization, AQuarterTurnLostOnCarpetUnderTheOutdoorLookIsFoundBySearchingTheTurns) {
   // Carpet with the outdoor look (a shadow turning with the heading, lens dirt, glare, a bumper, a rocking mount,
   // motion blur); frame 3 dropped. Frame 39 turns 91.8 degrees on the spot: brute-force matching keeps 12 pairs
@@ -395,31 +425,27 @@ TEST(Relocalization, AQuarterTurnLostOnCarpetUnderTheOutdoorLookIsFoundBySearchi
   // alike (carried by odometry), so frame 40 joins the map and frame 39 falls into place with it. With the search off
   // the robot stays lost; its segment still turns by the quarter turn the images' spectra measured at frame 39
   // (odometry.fallback_turn_image_width_px). Without those too, it stays a quarter turn off.
-  sim::SimulationSettings s = carpetLoopUnderTheOutdoorLook(23);
-  s.motion.spin_every = 80;
-  const sim::SequenceSimulator simulator(s);
-  const auto image = [](int position) { return position < 3 ? position : position + 1; };  // frame 3 dropped
+  const QuarterTurnOnCarpet quarter_turn;
   const auto run = [&](double search_turn_deg, std::vector<FrameStatus>& status, int spectra_width_px = 320) {
-    Config config = configFor(s);
-    config.odometry_checks.bridge_search_turn_deg = search_turn_deg;
-    config.odometry_checks.bridge_spectral_min_peak = 0.0;  // the search alone (the spectra's own bridge: below)
-    config.fallback.turn_image_width_px = spectra_width_px;
-    Slam slam(config, shippedVocabulary());
-    for (int k = 0; k < 46; ++k) status.push_back(slam.process(simulator.renderFrame(image(k)), k).status);
-    slam.finish();
-    return slam.trajectory();
+    return quarter_turn.run(
+        [&](Config& config) {
+          config.odometry_checks.bridge_search_turn_deg = search_turn_deg;
+          config.odometry_checks.bridge_spectral_min_peak = 0.0;  // the search alone (the spectra's own bridge: below)
+          config.fallback.turn_image_width_px = spectra_width_px;
+        },
+        status);
   };
   std::vector<FrameStatus> searched, unsearched;
   const Trajectory found = run(5.0, searched);
   const Trajectory lost = run(0.0, unsearched);
-  const Pose2 true_motion = between(simulator.groundTruth()[size_t(image(38))], simulator.groundTruth()[size_t(image(45))]);
+  const Pose2 true_motion = quarter_turn.trueMotion(38, 45);
   EXPECT_NEAR(true_motion.theta, 102.2 * M_PI / 180.0, 0.1 * M_PI / 180.0);  // the quarter turn and the circle
   EXPECT_EQ(searched[39], FrameStatus::lost);
   EXPECT_EQ(searched[40], FrameStatus::relocalized);
   for (size_t k = 41; k < searched.size(); ++k) EXPECT_NE(searched[k], FrameStatus::lost) << k;
   // The lost frame itself sits where the truth puts it too (its odometry to frame 40 carries the bridge back).
   const Pose2 turned = between(found[38].T_world_robot, found[39].T_world_robot);
-  const Pose2 true_turn = between(simulator.groundTruth()[size_t(image(38))], simulator.groundTruth()[size_t(image(39))]);
+  const Pose2 true_turn = quarter_turn.trueMotion(38, 39);
   EXPECT_LT((turned.translation() - true_turn.translation()).norm(), 0.008);
   // Measured 0.29 degrees, and 0.34 since the headings are refined outdoors (session 30; the joined motion below went
   // 0.38 -> 0.43 degrees with it).
@@ -442,18 +468,14 @@ TEST(Relocalization, AQuarterTurnLostOnCarpetUnderTheOutdoorLookIsFoundByItsSpec
   // The quarter turn above, with the search off: the images of frames 39 and 40 are registered with frame 38's by
   // their spectra (the turn from the magnitudes, the shift from the phase correlation), both less the mean of the
   // recent images. The two registrations agree through the lost segment's odometry, so frame 40 joins the map.
-  sim::SimulationSettings s = carpetLoopUnderTheOutdoorLook(23);
-  s.motion.spin_every = 80;
-  const sim::SequenceSimulator simulator(s);
-  const auto image = [](int position) { return position < 3 ? position : position + 1; };  // frame 3 dropped
+  const QuarterTurnOnCarpet quarter_turn;
   const auto run = [&](double min_peak, std::vector<FrameStatus>& status) {
-    Config config = configFor(s);
-    config.odometry_checks.bridge_search_turn_deg = 0.0;
-    config.odometry_checks.bridge_spectral_min_peak = min_peak;
-    Slam slam(config, shippedVocabulary());
-    for (int k = 0; k < 46; ++k) status.push_back(slam.process(simulator.renderFrame(image(k)), k).status);
-    slam.finish();
-    return slam.trajectory();
+    return quarter_turn.run(
+        [&](Config& config) {
+          config.odometry_checks.bridge_search_turn_deg = 0.0;
+          config.odometry_checks.bridge_spectral_min_peak = min_peak;
+        },
+        status);
   };
   std::vector<FrameStatus> registered, unregistered;
   const Trajectory found = run(0.15, registered);
@@ -465,11 +487,11 @@ TEST(Relocalization, AQuarterTurnLostOnCarpetUnderTheOutdoorLookIsFoundByItsSpec
   // The quarter turn and the frames after it sit where the truth puts them (measured 3.8 mm and 0.07 degrees, 5.5 mm
   // and 0.16 degrees).
   const Pose2 turned = between(found[38].T_world_robot, found[39].T_world_robot);
-  const Pose2 true_turn = between(simulator.groundTruth()[size_t(image(38))], simulator.groundTruth()[size_t(image(39))]);
+  const Pose2 true_turn = quarter_turn.trueMotion(38, 39);
   EXPECT_LT((turned.translation() - true_turn.translation()).norm(), 0.008);
   EXPECT_LT(std::abs(wrapAngle(turned.theta - true_turn.theta)), 0.5 * M_PI / 180.0);
   const Pose2 joined = between(found[38].T_world_robot, found[45].T_world_robot);
-  const Pose2 true_motion = between(simulator.groundTruth()[size_t(image(38))], simulator.groundTruth()[size_t(image(45))]);
+  const Pose2 true_motion = quarter_turn.trueMotion(38, 45);
   EXPECT_LT((joined.translation() - true_motion.translation()).norm(), 0.008);
   EXPECT_LT(std::abs(wrapAngle(joined.theta - true_motion.theta)), 0.5 * M_PI / 180.0);
 }
