@@ -23,6 +23,7 @@
 #include "groundslam/core/PoseGraph.hpp"
 #include "groundslam/core/RigidFit.hpp"
 #include "groundslam/core/ImageReduction.hpp"
+#include "groundslam/core/Repetition.hpp"
 #include "groundslam/core/SpectralTurn.hpp"
 #include "groundslam/bow/BowDatabase.hpp"
 #include "groundslam/io/VocabularyFile.hpp"
@@ -395,6 +396,16 @@ void BM_SpectralTurn(benchmark::State& state) {
   state.counters["peak_ratio"] = ratio;
 }
 BENCHMARK(BM_SpectralTurn)->Unit(benchmark::kMillisecond);
+
+void BM_RepetitionStrength(benchmark::State& state) {
+  // Paid every odometry.floor_repeat_check_frames frames until the floor is found to repeat: the autocorrelation of
+  // the 320-wide image's central square and its second peaks.
+  const cv::Mat image = reduceByWholeFactor(frames().first, Config().fallback.turn_image_width_px).pixels;
+  double strength = 0.0;
+  for (auto _ : state) strength = repetitionStrength(image);
+  state.counters["strength"] = strength;
+}
+BENCHMARK(BM_RepetitionStrength)->Unit(benchmark::kMillisecond);
 
 void BM_TrackingImage(benchmark::State& state) {
   // Paid by every frame while the mount is estimated (outdoor.track_points): the HD image reduced to 320 wide, its

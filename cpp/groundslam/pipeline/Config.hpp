@@ -136,6 +136,11 @@ struct OdometryChecks {
   /// standard deviations (a fit of a dozen or two keypoints on a weak floor is a degree off one time in ten).
   /// 0: never.
   int align_confirm_below_inliers = 30;
+  /// Such an unconfirmed fit that spans a gap (gap_min_steps) and that fewer than this share of its matches agree
+  /// with is refused as ambiguous: it is what a repeated floor (tiles) fits one repetition short of a gap dropped
+  /// without a trace (measured: 8-10% of the matches, where a true gap's fit on a floor that does not repeat has
+  /// 60-100%). The frame is lost; no bridge joins it (a bridge would meet the same repetitions). 0: never.
+  double unconfirmed_gap_min_inlier_share = 0.3;
   /// Every measured motion (not a low-overlap, aligned or lost one) has its heading refined by aligning the images
   /// from it (where something stays still in them, images of their own: outdoor.heading_image_width_px): the
   /// keypoints' heading and the images' are combined by
@@ -210,6 +215,15 @@ struct OdometryChecks {
   /// registration), both less the mean of the recent images. Believed, as the search is, once two frames agree;
   /// each must have a phase correlation peak of at least this, and twice the other half-turn's. 0: off.
   double bridge_spectral_min_peak = 0.15;
+  /// A floor that repeats (tiles, bricks) is also told from its images (core/Repetition.hpp): every this many frames
+  /// the image's repetition strength is measured, and once two checks in a row reach floor_repeat_min_strength the
+  /// floor counts as repeating for the rest of the run. There a loss for a motion unlike the robot's (frames dropped
+  /// without a trace) is not bridged: the gap's length is unknown, and a bridge lands one repetition short of it as
+  /// readily as right. 0: never checked.
+  int floor_repeat_check_frames = 10;
+  /// Measured: 0.25-0.49 on tiles whose every tile carries one pattern, 0.20-0.37 on a photo of bricks, at most 0.19
+  /// on asphalt, concrete, carpet and photos of gravel and grass.
+  double floor_repeat_min_strength = 0.22;
 };
 
 /// Outdoors and on real robots: features that stay still in the image, and the camera's tilt and height per
@@ -375,6 +389,7 @@ void visitConfigFields(Config_& c, Visitor&& v) {
   v("odometry", "align_check_radius_m", c.odometry_checks.align_check_radius_m, kPositive);
   v("odometry", "align_check_support", c.odometry_checks.align_check_support, kNonNegative);
   v("odometry", "align_confirm_below_inliers", c.odometry_checks.align_confirm_below_inliers, Range{0, 1000000});
+  v("odometry", "unconfirmed_gap_min_inlier_share", c.odometry_checks.unconfirmed_gap_min_inlier_share, Range{0.0, 1.0});
   v("odometry", "align_heading_sigma_deg", c.odometry_checks.align_heading_sigma_deg, kNonNegative);
   v("odometry", "sharp_turn_lever_m", c.odometry_checks.sharp_turn_lever_m, kNonNegative);
   v("odometry", "ok_within_m", c.odometry_checks.ok_within_m, kPositive);
@@ -397,6 +412,8 @@ void visitConfigFields(Config_& c, Visitor&& v) {
   v("odometry", "bridge_search_agreement_m", c.odometry_checks.bridge_search_agreement_m, kPositive);
   v("odometry", "bridge_search_agreement_deg", c.odometry_checks.bridge_search_agreement_deg, kPositive);
   v("odometry", "bridge_spectral_min_peak", c.odometry_checks.bridge_spectral_min_peak, Range{0.0, 1.0});
+  v("odometry", "floor_repeat_check_frames", c.odometry_checks.floor_repeat_check_frames, Range{0, 1000000});
+  v("odometry", "floor_repeat_min_strength", c.odometry_checks.floor_repeat_min_strength, Range{0.0, 1.0});
   v("odometry", "fallback_sigma_m", c.fallback.sigma_m, kPositive);
   v("odometry", "fallback_sigma_rad", c.fallback.sigma_rad, kPositive);
   v("odometry", "fallback_turn_min_inliers", c.fallback.turn_min_inliers, Range{0, 1000000});

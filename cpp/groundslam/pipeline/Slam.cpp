@@ -80,6 +80,7 @@ FrameResult Slam::process(PreparedFrame prepared) {
   Keyframe current{frame, prepared.timestamp, std::move(prepared.features), calibratedState(calibrated_mount_)};
   if (prepared.matches_to_previous) result.times.match_ms = prepared.match_ms;
 
+  noteRepetition(prepared.turn);
   std::vector<Match> still;  // matches of this frame to the previous one that stayed still in the image
   bool tied_to_previous = false;  // odometry measured this frame's motion: it is in the previous frame's segment
   // §III-B: match to the previous image, fit T_prev_curr with a robust M-estimator (eqs. 5-6), add the edge.
@@ -272,7 +273,11 @@ void Slam::startSegment(const OdometryEdge& failed) {
   const int to = addUnmeasuredMotion(failed);
   // A motion refused for its speed alone (frames dropped without a trace) is bridged too: the bridge believes only
   // what a loop closure would, over the time between the two frames.
-  bridgeable_loss_ = (tooLittleEvidence(failed.fit_status) || failed.fit_status == FitStatus::implausible_motion) && !repeatedFloor(to);
+  // Not after a motion unlike the robot's on a floor the images show repeating: frames dropped without a trace
+  // leave the gap's length unknown, and a bridge lands one repetition short of it as readily as right.
+  const bool unknown_gap = failed.fit_status == FitStatus::implausible_motion && floor_looks_repeated_;
+  bridgeable_loss_ = (tooLittleEvidence(failed.fit_status) || failed.fit_status == FitStatus::implausible_motion) && !repeatedFloor(to) &&
+                     !unknown_gap;
   loop_closer_->trackingLost(graph_.poses());
   pending_search_.reset();
   ever_lost_ = true;
@@ -575,8 +580,21 @@ OdometryEdge Slam::estimateOdometry(const Keyframe& previous, const Keyframe& cu
   if (check.outcome == FitCheck::Outcome::unconfirmed && fit.inliers < config_.odometry_checks.align_confirm_below_inliers) {
     edge.unconfirmed = true;
     edge.covariance += sigmaCovariance(config_.odometry_checks.align_sigma_m, config_.odometry_checks.align_sigma_rad);
+    // Not in the paper: unless it says frames were dropped and most of its matches disagree (a repeated floor
+    // fitted one repetition short of the gap): then the motion is not known.
+    if (fewAgreeAcrossAGap(edge, previous, current)) {
+      fit.status = edge.fit_status = FitStatus::ambiguous;
+      edge.unconfirmed = false;
+    }
   }
   return fit.ok() ? edge : fallbackOdometry(edge, measuredTurn(fit), likeliest_motion);
+}
+
+bool Slam::fewAgreeAcrossAGap(const OdometryEdge& edge, const Keyframe& previous, const Keyframe& current) const {
+  const double min_share = config_.odometry_checks.unconfirmed_gap_min_inlier_share;
+  if (!(min_share > 0.0) || edge.used.empty()) return false;
+  const double share = static_cast<double>(edge.inliers) / static_cast<double>(edge.used.size());
+  return share < min_share && spansGap(rockingSteps(edge, previous.timestamp, current.timestamp));
 }
 
 std::vector<Match> Slam::withoutRobotArtifacts(std::vector<Match> matches, const Keyframe& previous, const Keyframe& current) const {

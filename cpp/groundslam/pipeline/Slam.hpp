@@ -207,6 +207,9 @@ class Slam {
   Pose2 usualStep() const;
   /// The steps the robot may be making now: the usual one, or right after a turn on the spot two (see MotionPrior).
   std::vector<Pose2> usualSteps() const;
+  /// An unconfirmed fit that spans a gap and that fewer than odometry.unconfirmed_gap_min_inlier_share of its
+  /// matches agree with (a repeated floor fitted one repetition short of the gap).
+  bool fewAgreeAcrossAGap(const OdometryEdge& edge, const Keyframe& previous, const Keyframe& current) const;
   /// On a repeated floor: the fit is far from every motion the robot can have made (repetition_margin doubts),
   /// or one of its rival repetitions is nearer to one.
   bool doubtedByTheSteps(const RigidEstimate& fit, const Keyframe& previous, const Keyframe& current) const;
@@ -417,6 +420,13 @@ class Slam {
   int last_rival_frame_ = -1;  ///< the last frame whose odometry fit had a rival
   /// The floor repeats: one of the last kRepeatedFloorFrames odometry fits up to `frame` had a rival repetition.
   bool repeatedFloor(int frame) const { return last_rival_frame_ >= 0 && frame - last_rival_frame_ <= kRepeatedFloorFrames; }
+  /// The images say the floor repeats (odometry.floor_repeat_*), for the rest of the run: a loss there for a motion
+  /// unlike the robot's is not bridged (startSegment).
+  bool floor_looks_repeated_ = false;
+  int repetition_checks_ = 0;          ///< images checked so far
+  int repeated_checks_in_a_row_ = 0;   ///< of them, the last ones that reached the strength
+  /// Every odometry.floor_repeat_check_frames frames: the image's repetition strength, until the floor repeats.
+  void noteRepetition(const cv::Mat& turn_image);
   /// Tracking was lost for too little evidence or for the robot's speed on a floor that does not repeat: bridgeLoss
   /// may join it.
   bool bridgeable_loss_ = false;

@@ -1,9 +1,10 @@
 // Not in the paper: the turn of a frame whose motion failed, where it can still be measured (README *Turns from the
 // spectra*): a lost segment that is never found keeps the turn assumed at its loss for good, and the previous
-// motion's is a quarter turn wrong after a turn on the spot.
+// motion's is a quarter turn wrong after a turn on the spot. From the same reduced images: whether the floor repeats.
 #include <algorithm>
 #include <cmath>
 
+#include "groundslam/core/Repetition.hpp"
 #include "groundslam/core/SpectralTurn.hpp"
 #include "groundslam/pipeline/Slam.hpp"
 
@@ -90,6 +91,15 @@ std::optional<double> Slam::measuredTurn(const RigidEstimate& refused) const {
     if (std::abs(wrapAngle(rival.theta - theta)) > config_.fallback.sigma_rad) return std::nullopt;  // which turn?
   }
   return theta;
+}
+
+void Slam::noteRepetition(const cv::Mat& turn_image) {
+  const OdometryChecks& checks = config_.odometry_checks;
+  if (floor_looks_repeated_ || checks.floor_repeat_check_frames <= 0 || turn_image.empty()) return;
+  if (repetition_checks_++ % checks.floor_repeat_check_frames != 0) return;
+  const bool repeats = repetitionStrength(turn_image) >= checks.floor_repeat_min_strength;
+  repeated_checks_in_a_row_ = repeats ? repeated_checks_in_a_row_ + 1 : 0;
+  floor_looks_repeated_ = repeated_checks_in_a_row_ >= 2;
 }
 
 }  // namespace groundslam
