@@ -137,9 +137,10 @@ struct OdometryChecks {
   /// 0: never.
   int align_confirm_below_inliers = 30;
   /// Such an unconfirmed fit that spans a gap (gap_min_steps) and that fewer than this share of its matches agree
-  /// with is refused as ambiguous: it is what a repeated floor (tiles) fits one repetition short of a gap dropped
-  /// without a trace (measured: 8-10% of the matches, where a true gap's fit on a floor that does not repeat has
-  /// 60-100%). The frame is lost; no bridge joins it (a bridge would meet the same repetitions). 0: never.
+  /// with is refused as ambiguous: on a repeated floor (tiles) a gap dropped without a trace fits one repetition
+  /// short as readily as right (measured on tiles: 8-11% of the matches, two such fits a tile off for one right;
+  /// a true gap's fit on a floor that does not repeat has 62-100%). The frame is lost, not bridged (a bridge would
+  /// meet the same repetitions). 0: never.
   double unconfirmed_gap_min_inlier_share = 0.3;
   /// Every measured motion (not a low-overlap, aligned or lost one) has its heading refined by aligning the images
   /// from it (where something stays still in them, images of their own: outdoor.heading_image_width_px): the
