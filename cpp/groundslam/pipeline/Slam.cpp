@@ -80,7 +80,7 @@ FrameResult Slam::process(PreparedFrame prepared) {
   Keyframe current{frame, prepared.timestamp, std::move(prepared.features), calibratedState(calibrated_mount_)};
   if (prepared.matches_to_previous) result.times.match_ms = prepared.match_ms;
 
-  noteRepetition(prepared.turn);
+  noteRepetition(result.index, prepared.turn);
   std::vector<Match> still;  // matches of this frame to the previous one that stayed still in the image
   bool tied_to_previous = false;  // odometry measured this frame's motion: it is in the previous frame's segment
   // §III-B: match to the previous image, fit T_prev_curr with a robust M-estimator (eqs. 5-6), add the edge.

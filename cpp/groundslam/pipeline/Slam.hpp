@@ -423,10 +423,10 @@ class Slam {
   /// The images say the floor repeats (odometry.floor_repeat_*), for the rest of the run: a loss there for a motion
   /// unlike the robot's is not bridged (startSegment).
   bool floor_looks_repeated_ = false;
-  int repetition_checks_ = 0;          ///< images checked so far
-  int repeated_checks_in_a_row_ = 0;   ///< of them, the last ones that reached the strength
-  /// Every odometry.floor_repeat_check_frames frames: the image's repetition strength, until the floor repeats.
-  void noteRepetition(const cv::Mat& turn_image);
+  int repeated_checks_in_a_row_ = 0;   ///< the last checks that reached the strength
+  /// Every odometry.floor_repeat_check_frames frames of the session: the image's repetition strength, until the
+  /// floor repeats.
+  void noteRepetition(int session_frame, const cv::Mat& turn_image);
   /// Tracking was lost for too little evidence or for the robot's speed on a floor that does not repeat: bridgeLoss
   /// may join it.
   bool bridgeable_loss_ = false;

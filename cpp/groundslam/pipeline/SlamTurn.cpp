@@ -93,10 +93,10 @@ std::optional<double> Slam::measuredTurn(const RigidEstimate& refused) const {
   return theta;
 }
 
-void Slam::noteRepetition(const cv::Mat& turn_image) {
+void Slam::noteRepetition(int session_frame, const cv::Mat& turn_image) {
   const OdometryChecks& checks = config_.odometry_checks;
   if (floor_looks_repeated_ || checks.floor_repeat_check_frames <= 0 || turn_image.empty()) return;
-  if (repetition_checks_++ % checks.floor_repeat_check_frames != 0) return;
+  if (session_frame % checks.floor_repeat_check_frames != 0) return;
   const bool repeats = repetitionStrength(turn_image) >= checks.floor_repeat_min_strength;
   repeated_checks_in_a_row_ = repeats ? repeated_checks_in_a_row_ + 1 : 0;
   floor_looks_repeated_ = repeated_checks_in_a_row_ >= 2;
