@@ -151,6 +151,11 @@ struct OdometryChecks {
   /// correlates less than align_min_correlation or ends farther than align_check_m / align_check_rad from the fit
   /// leaves it as it was. 0: off.
   double align_heading_sigma_deg = 0.01;
+  /// Where nothing stays still, the finer contrast-normalised heading images (outdoor.heading_image_width_px) refine
+  /// the heading instead of the alignment's reduced images once their learnt variance is at most half the reduced
+  /// images' (a fine floor, carpet, that the reduced images blur away); the images not in use are measured on every
+  /// 20th frame, so that a change of floor is seen. False: the reduced images only.
+  bool finer_heading_images = true;
   /// A turn moves the ground by the camera's tilt error too: a tilt off by delta shifts every ground point by
   /// height * delta, and a turn by theta turns that shift into a translation error of 2 sin(theta / 2) * height *
   /// delta. One pair of views does not show the absolute tilt, so with delta = outdoor.tilt_prior_deg (the mount's
@@ -261,7 +266,9 @@ struct OutdoorConfig {
   /// heading_highpass_fraction of it, and each pixel divided by the contrast around it, so that the ground in the
   /// shadow counts as much as the ground in the light and a glare's slope adds nothing (measured on the outdoor
   /// carpet lawnmower, consecutive frames aligned: 0.042 degrees RMS at 320 pixels and 2%, against 0.11 for the
-  /// keypoints; the plain images at 160 pixels and 8% are off on most frames). 0: not refined there.
+  /// keypoints; the plain images at 160 pixels and 8% are off on most frames). Where nothing stays still they
+  /// replace the alignment's reduced images when they have measured the turn clearly more precisely (a fine floor,
+  /// carpet, that the reduced images blur away). 0: not refined there, nor used on clean floors.
   int heading_image_width_px = 320;
   double heading_highpass_fraction = 0.02;
   /// In those images, pixels where the background light changes by more than this share of its level over one blur
@@ -392,6 +399,7 @@ void visitConfigFields(Config_& c, Visitor&& v) {
   v("odometry", "align_confirm_below_inliers", c.odometry_checks.align_confirm_below_inliers, Range{0, 1000000});
   v("odometry", "unconfirmed_gap_min_inlier_share", c.odometry_checks.unconfirmed_gap_min_inlier_share, Range{0.0, 1.0});
   v("odometry", "align_heading_sigma_deg", c.odometry_checks.align_heading_sigma_deg, kNonNegative);
+  v("odometry", "finer_heading_images", c.odometry_checks.finer_heading_images, Range{});
   v("odometry", "sharp_turn_lever_m", c.odometry_checks.sharp_turn_lever_m, kNonNegative);
   v("odometry", "ok_within_m", c.odometry_checks.ok_within_m, kPositive);
   v("odometry", "ok_within_deg", c.odometry_checks.ok_within_deg, kPositive);

@@ -51,6 +51,7 @@ Slam::Slam(const Config& config, std::shared_ptr<const Vocabulary> vocabulary)
   image_turn_sign_ = imageTurnSign(camera_, intrinsicsOf(config.camera));
   artifact_headings_.settings = headingImageSettingsFrom(config);
   artifact_headings_.narrows_variance = false;
+  fine_headings_.settings = artifact_headings_.settings;
   odometry_fitting_.measure_ambiguity = true;
   const CameraIntrinsics k = intrinsicsOf(config.camera);
   mount_baseline_m_ = config.outdoor.baseline_fraction * std::min(k.width, k.height) * ground_sample_m_;
@@ -103,9 +104,27 @@ FrameResult Slam::process(PreparedFrame prepared) {
     bool vouched = vouchedFor(odometry, current);
     if (!odometry.fallback && !odometry.aligned && !odometry.low_overlap) {
       StageTimer timer;
-      const bool contradicted =
-          artifacts_seen ? refineHeadingByImages(odometry, current, previous_heading_, prepared.heading, artifact_headings_)
-                         : refineHeadingByImages(odometry, current, previous_alignment_, prepared.alignment, plain_headings_);
+      bool contradicted = false;
+      if (artifacts_seen) {
+        contradicted = refineHeadingByImages(odometry, current, previous_heading_, prepared.heading, artifact_headings_);
+      } else {
+        // Where nothing stays still: the alignment's reduced images, or the finer heading images where those measure
+        // the turn more precisely (a fine texture such as carpet, which the reduced images blur away). Each learns
+        // its precision on its own; the one not in use is measured on every kFineHeadingCheckFrames-th frame.
+        const bool fine = finerHeadingImagesBetter();
+        OdometryEdge probe = odometry;
+        const bool check = config_.odometry_checks.finer_heading_images &&
+                           (fine_headings_.count < kLearntHeadings || fine_check_count_++ % kFineHeadingCheckFrames == 0);
+        if (fine || check) {
+          OdometryEdge& target = fine ? odometry : probe;
+          contradicted = refineHeadingByImages(target, current, previous_heading_, prepared.heading, fine_headings_) && fine;
+        }
+        if (!fine || check) {
+          OdometryEdge& target = fine ? probe : odometry;
+          contradicted = (refineHeadingByImages(target, current, previous_alignment_, prepared.alignment, plain_headings_) && !fine) ||
+                         contradicted;
+        }
+      }
       if (contradicted && config_.odometry_checks.ok_sigmas > 0.0) vouched = false;  // ok_sigmas 0: the label is off
       result.times.fit_ms += timer.lap();
     }

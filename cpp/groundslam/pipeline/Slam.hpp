@@ -369,9 +369,26 @@ class Slam {
   /// (what the squared differences leave beyond the fits' own variance, odometry.align_heading_sigma_deg at least),
   /// nothing while fewer than 10 differences are known.
   std::optional<double> imageHeadingVariance(HeadingImages& source, double difference, double fit_variance) const;
+  /// True once `source`'s images are known to be less precise in heading than the keypoints (then not used).
+  bool lessPreciseThanKeypoints(const HeadingImages& source) const;
+  /// The images' heading variance a spread says (at least odometry.align_heading_sigma_deg squared).
+  double learntVariance(const Spread& spread) const;
+  /// True when the finer heading images have measured the turn more precisely than the alignment's reduced images
+  /// (and than the keypoints): fine_headings_ is then used where nothing stays still.
+  bool finerHeadingImagesBetter() const;
+  /// Headings are learnt from this many frames before they are used.
+  static constexpr int kLearntHeadings = 10;
+  /// Where one kind of heading image is in use, the other is measured (its precision learnt) on every this many frames.
+  static constexpr int kFineHeadingCheckFrames = 20;
+  /// The finer heading images are used where their learnt variance is at most this share of the reduced images'.
+  static constexpr double kFinerHeadingVarianceShare = 0.5;
   Spread tilt_spread_, height_spread_;
   HeadingImages plain_headings_;     ///< the alignment's images, where nothing stays still in them
   HeadingImages artifact_headings_;  ///< contrast-normalised images, where the robot's own artifacts are seen
+  /// The same contrast-normalised images where nothing stays still but the alignment's reduced images blur the floor
+  /// away (a fine texture such as carpet: their heading less precise than the keypoints').
+  HeadingImages fine_headings_;
+  int fine_check_count_ = 0;  ///< frames where nothing stayed still, for kFineHeadingCheckFrames
   int mount_estimates_ = 0;
   std::vector<FrameMountFactor> mount_factors_;  ///< every mount estimate's factor (graph frames)
   std::vector<MountState> used_mounts_;        ///< per graph frame: the mount its points were projected with

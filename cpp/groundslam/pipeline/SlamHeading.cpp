@@ -27,7 +27,6 @@ void combineHeading(Pose2& T, Eigen::Matrix3d& covariance, double difference, do
   for (int i = 0; i < 2; ++i) covariance(i, 2) = covariance(2, i) = (1.0 - weight) * covariance(i, 2);
 }
 
-constexpr int kLearntHeadings = 10;
 
 }  // namespace
 
@@ -47,14 +46,30 @@ std::optional<double> Slam::imageHeadingVariance(HeadingImages& source, double d
   Spread& spread = source.spread;
   ++source.count;
   spread.keep(difference * difference, fit_variance, source.count);
-  if (source.count < kLearntHeadings) return std::nullopt;
-  const double image_variance =
-      std::max(std::pow(config_.odometry_checks.align_heading_sigma_deg * M_PI / 180.0, 2), spread.square_mean - spread.variance_mean);
   // Images less precise than the keypoints are not used at all: a fine texture that the reduced images blur away.
   // (Where something stays still in the image, the plain images were 0.12-0.14 degrees RMS from the keypoints' and
   // 1-5% short of their turns; there the contrast-normalised heading images are used instead, Slam::process.)
-  if (image_variance > spread.variance_mean) return std::nullopt;
-  return image_variance;
+  if (source.count < kLearntHeadings || lessPreciseThanKeypoints(source)) return std::nullopt;
+  return learntVariance(source.spread);
+}
+
+double Slam::learntVariance(const Spread& spread) const {
+  return std::max(std::pow(config_.odometry_checks.align_heading_sigma_deg * M_PI / 180.0, 2), spread.square_mean - spread.variance_mean);
+}
+
+bool Slam::lessPreciseThanKeypoints(const HeadingImages& source) const {
+  return source.count >= kLearntHeadings && learntVariance(source.spread) > source.spread.variance_mean;
+}
+
+bool Slam::finerHeadingImagesBetter() const {
+  if (!config_.odometry_checks.finer_heading_images || fine_headings_.count < kLearntHeadings ||
+      plain_headings_.count < kLearntHeadings || lessPreciseThanKeypoints(fine_headings_)) {
+    return false;
+  }
+  // Clearly better only: each variance is learnt from a few dozen noisy differences and floored at
+  // align_heading_sigma_deg, where both images usually sit on floors the reduced ones show well.
+  return lessPreciseThanKeypoints(plain_headings_) ||
+         learntVariance(fine_headings_.spread) <= kFinerHeadingVarianceShare * learntVariance(plain_headings_.spread);
 }
 
 bool Slam::refineHeadingByImages(OdometryEdge& odometry, const Keyframe& current, const AlignmentImage& previous,
