@@ -682,13 +682,14 @@ LoopRun runRockingLoop(bool mount_from_loops) {
 }  // namespace
 
 TEST(OutdoorSequence, LoopClosuresTieTheMountAcrossTheRun) {
-  // Measured: 38 loop closures; tilt error of the solved mounts 0.062 -> 0.059 degrees (true: 0.5 RMS), ATE
-  // 0.635 -> 0.608 mm (session 26; session 10's program: 0.138 -> 0.126 degrees, 0.94 -> 0.89 mm). A loop factor
-  // tied to the wrong frames (the two swapped) gave 0.47 degrees and 2.6 mm.
+  // Measured: 38 loop closures; tilt error of the solved mounts 0.0625 -> 0.0605 degrees (true: 0.5 RMS), ATE
+  // 0.631 -> 0.618 mm (session 37, where the finer heading images refine part of this loop's headings; without them
+  // 0.0622 -> 0.0589 degrees and 0.634 -> 0.608 mm; session 10's program: 0.138 -> 0.126 degrees, 0.94 -> 0.89 mm).
+  // A loop factor tied to the wrong frames (the two swapped) gave 0.47 degrees and 2.6 mm.
   const LoopRun with = runRockingLoop(true), without = runRockingLoop(false);
   EXPECT_GE(with.loop_closures, 30);
   EXPECT_EQ(with.loop_closures, without.loop_closures);  // the factors change the mount, not the graph
-  EXPECT_LT(with.tilt_error_rad, 0.95 * without.tilt_error_rad);
+  EXPECT_LT(with.tilt_error_rad, 0.98 * without.tilt_error_rad);
   EXPECT_LT(with.ate_m, without.ate_m);
   EXPECT_LT(with.ate_m, 0.0011);
 }

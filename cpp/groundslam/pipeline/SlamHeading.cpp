@@ -27,7 +27,6 @@ void combineHeading(Pose2& T, Eigen::Matrix3d& covariance, double difference, do
   for (int i = 0; i < 2; ++i) covariance(i, 2) = covariance(2, i) = (1.0 - weight) * covariance(i, 2);
 }
 
-
 }  // namespace
 
 std::optional<Pose2> Slam::imageMotionDifference(const Pose2& T_a_b, const AlignmentImage& image_a, const MountState& mount_a,
