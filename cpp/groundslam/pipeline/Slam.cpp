@@ -102,19 +102,25 @@ FrameResult Slam::process(PreparedFrame prepared) {
     // The label judges the keypoints' fit: the images refine its heading, not its position, and a weak fit they
     // contradict is not vouched for.
     bool vouched = vouchedFor(odometry, current);
+    const Pose2 fitted = odometry.T_prev_curr;  // before the images refine it: refineEarlyHeadings starts from it
+    const Eigen::Matrix3d fitted_covariance = odometry.covariance;
+    HeadingImages* heading_source = nullptr;    // the kind of heading image measured for the edge in use
     if (!odometry.fallback && !odometry.aligned && !odometry.low_overlap) {
       StageTimer timer;
       bool contradicted = false;
       if (artifacts_seen) {
+        heading_source = &artifact_headings_;
         contradicted = refineHeadingByImages(odometry, current, previous_heading_, prepared.heading, artifact_headings_);
       } else {
         // Where nothing stays still: the alignment's reduced images, or the finer heading images where those measure
         // the turn more precisely (a fine texture such as carpet, which the reduced images blur away). Each learns
         // its precision on its own; the one not in use is measured on every kFineHeadingCheckFrames-th frame.
         const bool fine = finerHeadingImagesBetter();
-        OdometryEdge probe = odometry;
+        heading_source = fine ? &fine_headings_ : &plain_headings_;
         const bool check = config_.odometry_checks.finer_heading_images &&
                            (fine_headings_.count < kLearntHeadings || fine_check_count_++ % kFineHeadingCheckFrames == 0);
+        OdometryEdge probe;  // the kind not in use refines a copy, made only when it is measured
+        if (check) probe = odometry;
         if (fine || check) {
           OdometryEdge& target = fine ? odometry : probe;
           contradicted = refineHeadingByImages(target, current, previous_heading_, prepared.heading, fine_headings_) && fine;
@@ -162,6 +168,12 @@ FrameResult Slam::process(PreparedFrame prepared) {
       startSegment(odometry);  // tracking lost: the motion is unknown, global localization will find the pose
     } else {
       addToGraph(odometry);
+      // While the heading images learn their variance, the keypoints' fit is kept for refineEarlyHeadings.
+      const auto measured_now = [frame](const HeadingImages& h) { return !h.early.empty() && h.early.back().frame == frame; };
+      if (measured_now(plain_headings_) || measured_now(fine_headings_) || measured_now(artifact_headings_)) {
+        early_fits_[frame] = {graph_.edges().size() - 1, fitted, fitted_covariance};
+      }
+      if (heading_source != nullptr) refineEarlyHeadings(*heading_source);
     }
     result.status = lost_ || restart      ? FrameStatus::lost
                     : odometry.fallback   ? FrameStatus::fallback

@@ -89,13 +89,43 @@ bool Slam::refineHeadingByImages(OdometryEdge& odometry, const Keyframe& current
     // more than 0.25 degrees off, 15 of 799 above).
     return translation_agrees && odometry.inliers < checks.align_check_below_inliers;
   }
-  const auto image_variance = imageHeadingVariance(source, difference->theta, odometry.covariance(2, 2));
-  if (!image_variance) return false;
   Eigen::Vector2d centroid = Eigen::Vector2d::Zero();  // of the fit's matches in this frame
   for (const Match& m : odometry.used) centroid += current.features.points[static_cast<size_t>(m.query)];
   centroid /= static_cast<double>(odometry.used.size());
+  const auto image_variance = imageHeadingVariance(source, difference->theta, odometry.covariance(2, 2));
+  // The differences the variance is learnt from, the last one too: a kind that comes into use later refines them.
+  if (source.count <= kLearntHeadings) source.early.push_back({current.index, difference->theta, centroid});
+  if (!image_variance) return false;
   combineHeading(odometry.T_prev_curr, odometry.covariance, difference->theta, *image_variance, centroid, source.narrows_variance);
   return false;
+}
+
+void Slam::refineEarlyHeadings(HeadingImages& source) {
+  if (source.early.empty() || source.count < kLearntHeadings) return;
+  if (lessPreciseThanKeypoints(source)) {
+    source.early.clear();
+    return;
+  }
+  const double image_variance = learntVariance(source.spread);
+  int first_moved = static_cast<int>(graph_.poses().size());
+  for (const HeadingImages::EarlyDifference& early : source.early) {
+    const auto fit = early_fits_.find(early.frame);
+    if (fit == early_fits_.end()) continue;
+    // From the keypoints' fit, not from the edge as it stands: another kind of image may have refined it already.
+    Pose2 T = fit->second.T_prev_curr;
+    Eigen::Matrix3d covariance = fit->second.covariance;
+    combineHeading(T, covariance, early.difference_rad, image_variance, early.pivot, source.narrows_variance);
+    const GraphEdge& edge = graph_.edges()[fit->second.edge];
+    graph_.remeasureEdge(fit->second.edge, T, informationFrom(covariance, config_.graph.min_sigma_m, config_.graph.min_sigma_rad));
+    refined_early_odometry_[early.frame] = T;
+    first_moved = std::min(first_moved, edge.to);
+  }
+  source.early.clear();
+  if (first_moved >= static_cast<int>(graph_.poses().size())) return;
+  // The poses from the first refined edge on follow (held to any loop edge among them); those before stay.
+  const int first_free = std::max(first_moved, prior_frames_);
+  graph_.optimise(first_free);
+  if (loop_closer_) loop_closer_->mapMoved(graph_.poses(), first_free);
 }
 
 }  // namespace groundslam
