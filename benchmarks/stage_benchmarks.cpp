@@ -456,6 +456,36 @@ void BM_MountEstimation(benchmark::State& state) {
 }
 BENCHMARK(BM_MountEstimation)->Unit(benchmark::kMillisecond);
 
+void BM_StepRemeasure(benchmark::State& state) {
+  // What finish() pays per odometry step with outdoor.remeasure_odometry: the step's 64 kept pairs projected through
+  // the two frames' mounts as used and as solved over the run, and fitted each time from the step.
+  const GroundFeatures a = groundFeatures(frames().first), b = groundFeatures(frames().second);
+  const auto matches = DescriptorMatcher({0.7, MatcherMethod::brute_force}).match(b.descriptors, a.descriptors);
+  GroundFeatures pa, pb;
+  const size_t count = std::min<size_t>(64, matches.size());
+  for (size_t k = 0; k < count; ++k) {
+    const Match& m = matches[k * matches.size() / count];
+    pa.rays.push_back(a.rays[static_cast<size_t>(m.train)]);
+    pb.rays.push_back(b.rays[static_cast<size_t>(m.query)]);
+  }
+  pa.points.assign(count, Eigen::Vector2d::Zero());
+  pb.points.assign(count, Eigen::Vector2d::Zero());
+  const Eigen::Isometry3d calibrated = frames().camera.T_robot_camera();
+  MountState solved = calibratedState(calibrated);
+  solved.roll_rad += 0.003;
+  solved.pitch_rad -= 0.002;
+  const FitSettings settings;
+  for (auto _ : state) {
+    for (const Eigen::Isometry3d& mount : {calibrated, mountFor(calibrated, solved)}) {
+      reprojectToGround(pa, mount);
+      reprojectToGround(pb, mount);
+      benchmark::DoNotOptimize(refineRigidTransform(pa.points, pb.points, frames().simulator_truth_a_b, settings));
+    }
+  }
+  state.counters["pairs"] = static_cast<double>(count);
+}
+BENCHMARK(BM_StepRemeasure)->Unit(benchmark::kMicrosecond);
+
 void BM_MountSmoothing(benchmark::State& state) {
   // What finish() adds once per run: every frame's factor (its state, the previous frame's and the fifth one
   // back, as the pipeline's references), the priors chosen on up to 600 frames, then one solve over all of them.

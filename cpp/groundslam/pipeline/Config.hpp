@@ -250,6 +250,10 @@ struct OutdoorConfig {
   /// With smooth_mount: each accepted loop closure's pair of views adds its factor too, tying the two frames'
   /// mounts across the run (the places keep their rays for it).
   bool mount_from_loops = true;
+  /// With smooth_mount: every odometry step is fitted again at the end on a sample of its pairs through the two
+  /// frames' final mounts, and the change applied to its edge (a tilt off sideways turns a step: the farther the step,
+  /// the more).
+  bool remeasure_odometry = true;
   double height_prior_m = 0.003;   ///< standard deviation of the height around the calibrated height
   /// Images give the height only relative to the reference frame's, so errors would add up frame after
   /// frame; each frame gives back this fraction of its difference from the calibrated height (a mount
@@ -488,6 +492,7 @@ void visitConfigFields(Config_& c, Visitor&& v) {
   v("outdoor", "tilt_prior_deg", c.outdoor.tilt_prior_deg, Range{0.0, 45.0, true});
   v("outdoor", "smooth_mount", c.outdoor.smooth_mount, Range{});
   v("outdoor", "mount_from_loops", c.outdoor.mount_from_loops, Range{});
+  v("outdoor", "remeasure_odometry", c.outdoor.remeasure_odometry, Range{});
   v("outdoor", "height_prior_m", c.outdoor.height_prior_m, kPositive);
   v("outdoor", "height_return", c.outdoor.height_return, Range{0.0, 1.0});
   v("outdoor", "reference_sigma_deg", c.outdoor.reference_sigma_deg, Range{0.0, 45.0, true});

@@ -168,6 +168,7 @@ FrameResult Slam::process(PreparedFrame prepared) {
       startSegment(odometry);  // tracking lost: the motion is unknown, global localization will find the pose
     } else {
       addToGraph(odometry);
+      keepOdometryPairs(odometry, *previous_, current);
       // While the heading images learn their variance, the keypoints' fit is kept for refineEarlyHeadings.
       const auto measured_now = [frame](const HeadingImages& h) { return !h.early.empty() && h.early.back().frame == frame; };
       if (measured_now(plain_headings_) || measured_now(fine_headings_) || measured_now(artifact_headings_)) {
@@ -281,7 +282,9 @@ void Slam::finish() {
   optimiseIfDue(ignored, true);
   if (config_.outdoor.estimate_mount && config_.outdoor.smooth_mount) {
     smoothMount();
-    remeasureLoops();
+    const bool steps_changed = remeasureOdometry();
+    const bool loops_changed = remeasureLoops();
+    if (steps_changed || loops_changed) graph_.optimise();
   }
 }
 

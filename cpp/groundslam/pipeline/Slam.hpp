@@ -319,7 +319,19 @@ class Slam {
                                                              const Pose2& T_guess) const;
   /// At the end, once the mounts are smoothed: every loop fitted again through its frames' final mounts, and the
   /// graph optimised again.
-  void remeasureLoops();
+  /// Every loop fitted again through its frames' final mounts (loop_closure.remeasure_at_end); true when an edge changed.
+  bool remeasureLoops();
+  /// Pairs a, b projected through the given mounts and fitted (no mount covariance).
+  RigidEstimate fitRays(const LoopRays& pairs, const MountState& a_mount, const MountState& b_mount, const Pose2& T_guess) const;
+  /// A sample of an odometry edge's inlier pairs, kept for remeasureOdometry (outdoor.remeasure_odometry).
+  void keepOdometryPairs(const OdometryEdge& odometry, const Keyframe& previous, const Keyframe& current);
+  /// Every odometry edge changed by what its pairs' fit changes from the mounts used to the final ones; true when an
+  /// edge changed.
+  bool remeasureOdometry();
+  /// Pairs kept per odometry edge: the change of their fit, not the fit itself, is used, and their noise cancels in it.
+  static constexpr size_t kRemeasuredPairs = 64;
+  std::vector<LoopRays> odometry_rays_;       ///< per odometry edge, for remeasureOdometry
+  std::map<int, Pose2> remeasured_odometry_;  ///< by frame: each step as remeasureOdometry made it, for finalOdometry
   /// Keeps the frame's tracking image while it may still become a place, and a place's for good.
   void keepPlaceTracking(int frame, const TrackingImage& tracking);
   /// The covariance a pair of views' transform gets from their frames' tilt estimates (loop_closure.tilt_sigma_deg).

@@ -86,8 +86,7 @@ std::optional<Slam::LoopRays> Slam::measureLoopPairs(LoopCandidate& loop, const 
   return tracked_pairs;
 }
 
-std::optional<std::pair<Pose2, Eigen::Matrix3d>> Slam::fitLoopRays(const LoopRays& pairs, const MountState& a_mount, const MountState& b_mount,
-                                                                   const Pose2& T_guess) const {
+RigidEstimate Slam::fitRays(const LoopRays& pairs, const MountState& a_mount, const MountState& b_mount, const Pose2& T_guess) const {
   GroundFeatures a, b;
   a.rays = pairs.a_rays;
   b.rays = pairs.b_rays;
@@ -95,8 +94,20 @@ std::optional<std::pair<Pose2, Eigen::Matrix3d>> Slam::fitLoopRays(const LoopRay
   b.points.assign(b.rays.size(), Eigen::Vector2d::Zero());
   reprojectToGround(a, mountFor(calibrated_mount_, a_mount));
   reprojectToGround(b, mountFor(calibrated_mount_, b_mount));
-  const RigidEstimate fit = refineRigidTransform(a.points, b.points, T_guess, odometry_fitting_);
+  return refineRigidTransform(a.points, b.points, T_guess, odometry_fitting_);
+}
+
+std::optional<std::pair<Pose2, Eigen::Matrix3d>> Slam::fitLoopRays(const LoopRays& pairs, const MountState& a_mount, const MountState& b_mount,
+                                                                   const Pose2& T_guess) const {
+  const RigidEstimate fit = fitRays(pairs, a_mount, b_mount, T_guess);
   if (!fit.ok()) return std::nullopt;
+  GroundFeatures a, b;
+  a.rays = pairs.a_rays;
+  b.rays = pairs.b_rays;
+  a.points.assign(a.rays.size(), Eigen::Vector2d::Zero());
+  b.points.assign(b.rays.size(), Eigen::Vector2d::Zero());
+  reprojectToGround(a, mountFor(calibrated_mount_, a_mount));
+  reprojectToGround(b, mountFor(calibrated_mount_, b_mount));
   return std::make_pair(fit.T_target_source, fit.covariance + mountCovariance(fit.T_target_source, a, a_mount, b, b_mount));
 }
 
@@ -125,8 +136,8 @@ Eigen::Matrix3d Slam::mountCovariance(const Pose2& T_a_b, const GroundFeatures& 
   return covariance;
 }
 
-void Slam::remeasureLoops() {
-  if (!config_.loop_closure.remeasure_at_end || mount_corrections_.empty() || loop_rays_.empty()) return;
+bool Slam::remeasureLoops() {
+  if (!config_.loop_closure.remeasure_at_end || mount_corrections_.empty() || loop_rays_.empty()) return false;
   // The graph's poses are those of the mounts used during the run; pose i with its final mount is pose i *
   // mount_corrections_[i]. A loop fitted through the final mounts, brought back to the graph's poses.
   for (const LoopRays& pairs : loop_rays_) {
@@ -139,7 +150,7 @@ void Slam::remeasureLoops() {
     graph_.remeasureEdge(pairs.edge, mount_corrections_[a] * fit->first * mount_corrections_[b].inverse(),
                          informationFrom(fit->second, config_.graph.min_sigma_m, config_.graph.min_sigma_rad));
   }
-  graph_.optimise();
+  return true;
 }
 
 }  // namespace groundslam

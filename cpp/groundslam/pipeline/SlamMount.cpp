@@ -253,6 +253,8 @@ MountState Slam::finalMount(int index) const {
 
 Pose2 Slam::finalOdometry(int index, const Pose2& odometry) const {
   const size_t i = static_cast<size_t>(index + prior_frames_);
+  const auto remeasured = remeasured_odometry_.find(static_cast<int>(i));
+  if (remeasured != remeasured_odometry_.end()) return remeasured->second;
   const auto refined = refined_early_odometry_.find(static_cast<int>(i));
   const Pose2& measured = refined == refined_early_odometry_.end() ? odometry : refined->second;
   if (index < 1 || i >= mount_corrections_.size() || static_cast<int>(i) - 1 < prior_frames_) return measured;
