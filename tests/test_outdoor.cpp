@@ -591,7 +591,9 @@ TEST(OutdoorSequence, MountSolvedOverTheWholeRunHalvesTheRockingError) {
   EXPECT_EQ(smoothed.wrong_measured, per_frame.wrong_measured);  // the frames' own motions are what they were
   // The motions of frames.csv, re-projected with the solved mounts: 1.29 -> 0.83 mm RMS.
   EXPECT_LT(smoothed.final_motion_error_m, 0.75 * smoothed.motion_error_m);
-  EXPECT_EQ(per_frame.final_motion_error_m, per_frame.motion_error_m);  // nothing solved, nothing changed
+  // Nothing solved: only the run's first steps changed, their heading refined once the heading images had learnt
+  // their precision (measured: 1.01704 -> 1.01707 mm).
+  EXPECT_NEAR(per_frame.final_motion_error_m, per_frame.motion_error_m, 1e-6);
 }
 
 TEST(OutdoorSequence, TrackedPointsCutTheTiltError) {
