@@ -251,8 +251,8 @@ struct OutdoorConfig {
   /// mounts across the run (the places keep their rays for it).
   bool mount_from_loops = true;
   /// With smooth_mount: every odometry step is fitted again at the end on a sample of its pairs through the two
-  /// frames' final mounts, and the change applied to its edge (a tilt off sideways turns a step: the farther the step,
-  /// the more).
+  /// frames' final mounts, and the turn that the poses' corrections leave of the change applied to its edge (a tilt
+  /// off sideways turns a step: the farther the step, the more).
   bool remeasure_odometry = true;
   double height_prior_m = 0.003;   ///< standard deviation of the height around the calibrated height
   /// Images give the height only relative to the reference frame's, so errors would add up frame after

@@ -317,16 +317,15 @@ class Slam {
   /// The transform and covariance of a loop's pairs projected through the given mounts; empty when the fit fails.
   std::optional<std::pair<Pose2, Eigen::Matrix3d>> fitLoopRays(const LoopRays& pairs, const MountState& a_mount, const MountState& b_mount,
                                                              const Pose2& T_guess) const;
-  /// At the end, once the mounts are smoothed: every loop fitted again through its frames' final mounts, and the
-  /// graph optimised again.
-  /// Every loop fitted again through its frames' final mounts (loop_closure.remeasure_at_end); true when an edge changed.
+  /// At the end, once the mounts are smoothed: every loop fitted again through its frames' final mounts
+  /// (loop_closure.remeasure_at_end); true when an edge changed (finish() then optimises the graph again).
   bool remeasureLoops();
   /// Pairs a, b projected through the given mounts and fitted (no mount covariance).
   RigidEstimate fitRays(const LoopRays& pairs, const MountState& a_mount, const MountState& b_mount, const Pose2& T_guess) const;
   /// A sample of an odometry edge's inlier pairs, kept for remeasureOdometry (outdoor.remeasure_odometry).
   void keepOdometryPairs(const OdometryEdge& odometry, const Keyframe& previous, const Keyframe& current);
-  /// Every odometry edge changed by what its pairs' fit changes from the mounts used to the final ones; true when an
-  /// edge changed.
+  /// At the end, once the mounts are smoothed: every odometry edge turned by what its pairs' fit turns from the mounts
+  /// used to the final ones, beyond the poses' corrections; true when an edge changed.
   bool remeasureOdometry();
   /// Pairs kept per odometry edge: the change of their fit, not the fit itself, is used, and their noise cancels in it.
   static constexpr size_t kRemeasuredPairs = 64;
