@@ -320,6 +320,8 @@ class Slam {
   /// At the end, once the mounts are smoothed: every loop fitted again through its frames' final mounts
   /// (loop_closure.remeasure_at_end); true when an edge changed (finish() then optimises the graph again).
   bool remeasureLoops();
+  /// Rays (normalised image coordinates) projected to the ground through the given mount.
+  GroundFeatures projectRays(const std::vector<Eigen::Vector2d>& rays, const MountState& mount) const;
   /// Pairs a, b projected through the given mounts and fitted (no mount covariance).
   RigidEstimate fitRays(const LoopRays& pairs, const MountState& a_mount, const MountState& b_mount, const Pose2& T_guess) const;
   /// A sample of an odometry edge's inlier pairs, kept for remeasureOdometry (outdoor.remeasure_odometry).

@@ -86,28 +86,25 @@ std::optional<Slam::LoopRays> Slam::measureLoopPairs(LoopCandidate& loop, const 
   return tracked_pairs;
 }
 
+GroundFeatures Slam::projectRays(const std::vector<Eigen::Vector2d>& rays, const MountState& mount) const {
+  GroundFeatures features;
+  features.rays = rays;
+  features.points.assign(rays.size(), Eigen::Vector2d::Zero());
+  reprojectToGround(features, mountFor(calibrated_mount_, mount));
+  return features;
+}
+
 RigidEstimate Slam::fitRays(const LoopRays& pairs, const MountState& a_mount, const MountState& b_mount, const Pose2& T_guess) const {
-  GroundFeatures a, b;
-  a.rays = pairs.a_rays;
-  b.rays = pairs.b_rays;
-  a.points.assign(a.rays.size(), Eigen::Vector2d::Zero());
-  b.points.assign(b.rays.size(), Eigen::Vector2d::Zero());
-  reprojectToGround(a, mountFor(calibrated_mount_, a_mount));
-  reprojectToGround(b, mountFor(calibrated_mount_, b_mount));
-  return refineRigidTransform(a.points, b.points, T_guess, odometry_fitting_);
+  return refineRigidTransform(projectRays(pairs.a_rays, a_mount).points, projectRays(pairs.b_rays, b_mount).points, T_guess,
+                              odometry_fitting_);
 }
 
 std::optional<std::pair<Pose2, Eigen::Matrix3d>> Slam::fitLoopRays(const LoopRays& pairs, const MountState& a_mount, const MountState& b_mount,
                                                                    const Pose2& T_guess) const {
-  const RigidEstimate fit = fitRays(pairs, a_mount, b_mount, T_guess);
+  const GroundFeatures a = projectRays(pairs.a_rays, a_mount);
+  const GroundFeatures b = projectRays(pairs.b_rays, b_mount);
+  const RigidEstimate fit = refineRigidTransform(a.points, b.points, T_guess, odometry_fitting_);
   if (!fit.ok()) return std::nullopt;
-  GroundFeatures a, b;
-  a.rays = pairs.a_rays;
-  b.rays = pairs.b_rays;
-  a.points.assign(a.rays.size(), Eigen::Vector2d::Zero());
-  b.points.assign(b.rays.size(), Eigen::Vector2d::Zero());
-  reprojectToGround(a, mountFor(calibrated_mount_, a_mount));
-  reprojectToGround(b, mountFor(calibrated_mount_, b_mount));
   return std::make_pair(fit.T_target_source, fit.covariance + mountCovariance(fit.T_target_source, a, a_mount, b, b_mount));
 }
 

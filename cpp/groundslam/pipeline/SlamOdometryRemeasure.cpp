@@ -53,10 +53,7 @@ bool Slam::remeasureOdometry() {
     const Pose2 corrected = corr_a.inverse() * edge.T_from_to * corr_b;
     const double turn = ((corr_a.inverse() * used.T_target_source * corr_b).inverse() * final.T_target_source).theta;
     // About the pairs' centroid in the later frame, where the fit is surest.
-    GroundFeatures later;
-    later.rays = pairs.b_rays;
-    later.points.assign(later.rays.size(), Eigen::Vector2d::Zero());
-    reprojectToGround(later, mountFor(calibrated_mount_, final_mounts_[b]));
+    const GroundFeatures later = projectRays(pairs.b_rays, final_mounts_[b]);
     Eigen::Vector2d pivot = Eigen::Vector2d::Zero();
     for (const Eigen::Vector2d& p : later.points) pivot += p;
     pivot /= static_cast<double>(later.points.size());
