@@ -457,6 +457,7 @@ void visitConfigFields(Config_& c, Visitor&& v) {
   v("loop_closure", "max_disagreement_rad_per_m", c.loop_closure.max_disagreement_rad_per_m, kNonNegative);
   v("loop_closure", "refine_by_tracked_points", c.loop_closure.refine_by_tracked_points, Range{});
   v("loop_closure", "tilt_sigma_deg", c.loop_closure.tilt_sigma_deg, kNonNegative);
+  v("loop_closure", "rescue_min_inliers", c.loop_closure.rescue_min_inliers, Range{0, 1e9});
   v("loop_closure", "remeasure_at_end", c.loop_closure.remeasure_at_end, Range{});
   v("loop_closure", "lost_reach_m", c.loop_closure.lost_reach_m, kNonNegative);
   v("loop_closure", "lost_reach_deg", c.loop_closure.lost_reach_deg, Range{0.0, 180.0});

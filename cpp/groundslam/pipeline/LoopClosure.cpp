@@ -230,11 +230,29 @@ LoopCandidate LoopCloser::verify(int frame_a, const GroundFeatures& a, int frame
   candidate.ambiguity = fit.ambiguity();
   if (candidate.covariance_score > settings_.max_covariance_score) {
     candidate.rejected_by = LoopGate::covariance;
+    candidate.coarse_T_a_b = coarseTransform(fit, points_a, points_b, prior, fitting);
   } else if (candidate.ambiguity > settings_.max_ambiguity) {
     // Not in the paper: on a repetitive floor a transform shifted by one tile fits almost as well.
     candidate.rejected_by = LoopGate::ambiguous;
   }
   return candidate;
+}
+
+std::optional<Pose2> LoopCloser::coarseTransform(const RigidEstimate& fit, const std::vector<Eigen::Vector2d>& points_a,
+                                                 const std::vector<Eigen::Vector2d>& points_b, const TransformPrior& prior,
+                                                 FitSettings fitting) const {
+  if (settings_.rescue_min_inliers <= 0 || fit.inliers < settings_.rescue_min_inliers) return std::nullopt;
+  if (fit.ok()) return fit.ambiguity() <= settings_.max_ambiguity ? std::optional<Pose2>(fit.T_target_source) : std::nullopt;
+  // Too few inliers for the gate: the same consensus, fitted with the smaller count allowed.
+  fitting.min_inliers = settings_.rescue_min_inliers;
+  const RigidEstimate coarse = fitRigidTransform(points_a, points_b, fitting, prior);
+  if (!coarse.ok() || coarse.ambiguity() > settings_.max_ambiguity) return std::nullopt;
+  return coarse.T_target_source;
+}
+
+void LoopCloser::loopRescued(const LoopCandidate& candidate) {
+  recent_loops_.emplace_back(candidate.frame_a, candidate.frame_b);
+  if (recent_loops_.size() > kRecentLoops) recent_loops_.pop_front();
 }
 
 void LoopCloser::mapMoved(const std::vector<Pose2>& estimates, int first_moved) {

@@ -61,6 +61,12 @@ struct LoopClosureSettings {
   /// How far a frame's estimated tilt is off (degrees, each of roll and pitch): its effect on a refined loop's
   /// transform, which the tracked points' own residuals do not show, is added to the loop's covariance.
   double tilt_sigma_deg = 0.2;
+  /// Not in the paper: a candidate that fails gate 3 for too few inliers or a loose covariance, whose matches still
+  /// agree on one transform with at least this many inliers (and no rival), is measured again by its keypoints
+  /// tracked into the place's image (refine_by_tracked_points) and accepted when the tracked points pass gate 3
+  /// themselves: on a fine texture such as carpet the ratio test keeps a few dozen of the keypoints' matches, and
+  /// a handful of inliers among them. Not on a floor seen to repeat. 0: off.
+  int rescue_min_inliers = 8;
   /// Not in the paper: while tracking is lost on a floor that does not repeat, a lost frame whose global localization
   /// failed is also verified, as a loop closure is, against the map's places near its estimate, which the unknown
   /// motion at the loss (frames dropped, a turn) may have moved by up to lost_reach_m and lost_reach_deg more than
@@ -90,6 +96,9 @@ struct LoopCandidate {
   LoopGate rejected_by = LoopGate::none;
   Pose2 T_a_b;                         ///< pose of b's robot in a's robot frame (when fitted)
   Eigen::Matrix3d covariance = Eigen::Matrix3d::Identity();
+  /// Gate 3 failed, yet the matches agree on this transform (LoopClosureSettings::rescue_min_inliers): a caller
+  /// with the images may measure the loop again from it.
+  std::optional<Pose2> coarse_T_a_b;
   bool accepted() const { return rejected_by == LoopGate::none; }
 };
 
@@ -143,6 +152,9 @@ class LoopCloser {
   /// Moves the places and map anchors of frames from `first_moved` on to their current estimates, after an
   /// optimisation moved them.
   void mapMoved(const std::vector<Pose2>& estimates, int first_moved);
+  /// A candidate process() rejected was accepted after all (rescued by the images): the search rests after it as
+  /// after any accepted loop.
+  void loopRescued(const LoopCandidate& candidate);
   const PlaceMap& places() const { return places_; }
   const FeatureMap& featureMap() const { return feature_map_; }
 
@@ -163,6 +175,11 @@ class LoopCloser {
   void admitPlaces(int last, const std::vector<Pose2>& estimates);
   LoopCandidate verify(int frame_a, const GroundFeatures& a, int frame_b, const GroundFeatures& b, double bow_score,
                        const TransformPrior& prior, const FitSettings& fitting) const;
+  /// For a candidate that failed gate 3: the transform its matches agree on with at least rescue_min_inliers
+  /// inliers and no rival (LoopCandidate::coarse_T_a_b), if any.
+  std::optional<Pose2> coarseTransform(const RigidEstimate& fit, const std::vector<Eigen::Vector2d>& points_a,
+                                       const std::vector<Eigen::Vector2d>& points_b, const TransformPrior& prior,
+                                       FitSettings fitting) const;
   /// The estimated T_a_b and how far drift since the last correction may have moved it.
   TransformPrior priorOf(int frame_a, int frame_b, const std::vector<Pose2>& estimates) const;
   /// The path length over which the estimate of T_a_b could have drifted: between a and b, or through

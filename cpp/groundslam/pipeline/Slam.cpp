@@ -427,7 +427,12 @@ void Slam::closeLoops(const Keyframe& current, const TrackingImage& tracking, Fr
   StageTimer timer;
   for (LoopCandidate candidate : loop_closer_->process(current.index, segment_, current.features, graph_.poses())) {
     std::optional<LoopRays> pairs;
-    if (candidate.accepted()) pairs = measureLoopPairs(candidate, current, tracking);
+    if (candidate.accepted()) {
+      pairs = measureLoopPairs(candidate, current, tracking);
+    } else if (candidate.coarse_T_a_b) {
+      pairs = rescueLoop(candidate, current, tracking);
+      if (pairs) loop_closer_->loopRescued(candidate);
+    }
     report(reported(candidate));
     if (!candidate.accepted()) continue;
     if (pairs) {

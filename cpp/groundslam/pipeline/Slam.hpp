@@ -314,9 +314,24 @@ class Slam {
   /// An accepted loop's pairs: its keypoint pairs tracked into the place's image when they track
   /// (loop_closure.refine_by_tracked_points; the loop then refitted on them), else its keypoints' guided pairs.
   std::optional<LoopRays> measureLoopPairs(LoopCandidate& loop, const Keyframe& current, const TrackingImage& tracking) const;
-  /// The transform and covariance of a loop's pairs projected through the given mounts; empty when the fit fails.
-  std::optional<std::pair<Pose2, Eigen::Matrix3d>> fitLoopRays(const LoopRays& pairs, const MountState& a_mount, const MountState& b_mount,
-                                                             const Pose2& T_guess) const;
+  /// A loop candidate's keypoint pairs matched around T_a_b (outdoor.reference_match_radius_m).
+  LoopRays guidedLoopPairs(const LoopCandidate& loop, const Keyframe& current, const GroundFeatures& reference, const Pose2& T_a_b) const;
+  /// Current keypoints paired with where T_a_b puts them in the place's image (for rescueLoop: the keypoints'
+  /// own matches are too few there); at most kRescuePairs, those landing inside the image.
+  LoopRays predictedLoopPairs(const LoopCandidate& loop, const Keyframe& current, const Pose2& T_a_b) const;
+  static constexpr size_t kRescuePairs = 300;
+  /// Keypoint pairs' current keypoints tracked into the place's image (loop_closure.refine_by_tracked_points):
+  /// the tracked pairs, or empty when too few track.
+  std::optional<LoopRays> trackLoopPairs(const LoopRays& keypoints, const TrackingImage& tracking) const;
+  /// A candidate that failed gate 3 with a coarse transform (loop_closure.rescue_min_inliers), measured by tracked
+  /// points: accepted, with its tracked pairs, when they pass gate 3 and agree with the coarse transform.
+  std::optional<LoopRays> rescueLoop(LoopCandidate& loop, const Keyframe& current, const TrackingImage& tracking) const;
+  /// How far (radians) a rescued loop's tracked fit may turn from the keypoints' coarse transform.
+  static constexpr double kRescueAgreementRad = 1.0 * M_PI / 180.0;
+  /// The fit of a loop's pairs projected through the given mounts, its covariance including the mounts' tilt
+  /// (mountCovariance); empty when the fit fails.
+  std::optional<RigidEstimate> fitLoopRays(const LoopRays& pairs, const MountState& a_mount, const MountState& b_mount,
+                                           const Pose2& T_guess) const;
   /// At the end, once the mounts are smoothed: every loop fitted again through its frames' final mounts
   /// (loop_closure.remeasure_at_end); true when an edge changed (finish() then optimises the graph again).
   bool remeasureLoops();

@@ -30,22 +30,43 @@ void Slam::keepPlaceTracking(int frame, const TrackingImage& tracking) {
   }
 }
 
-std::optional<Slam::LoopRays> Slam::measureLoopPairs(LoopCandidate& loop, const Keyframe& current, const TrackingImage& tracking) const {
-  const Place* place = loop_closer_->places().find(loop.frame_a);
-  if (place == nullptr || static_cast<size_t>(loop.frame_a) >= used_mounts_.size() || !current.features.hasRays()) return std::nullopt;
-  const GroundFeatures reference = place->features();
-  if (!reference.hasRays()) return std::nullopt;
-  // Guided pairs around the loop's transform: the keypoints' pairs, kept when the images cannot do better.
+Slam::LoopRays Slam::guidedLoopPairs(const LoopCandidate& loop, const Keyframe& current, const GroundFeatures& reference,
+                                     const Pose2& T_a_b) const {
   const std::vector<Match> matches =
-      matchNearby(current.features, reference, loop.T_a_b, config_.outdoor.reference_match_radius_m, config_.matching.ratio);
+      matchNearby(current.features, reference, T_a_b, config_.outdoor.reference_match_radius_m, config_.matching.ratio);
   LoopRays keypoints{0, loop.frame_a, loop.frame_b, {}, {}};
   for (const Match& m : matches) {
     keypoints.a_rays.push_back(reference.rays[static_cast<size_t>(m.train)]);
     keypoints.b_rays.push_back(current.features.rays[static_cast<size_t>(m.query)]);
   }
-  const auto image = place_tracking_.find(loop.frame_a);
-  if (!config_.loop_closure.refine_by_tracked_points || tracking.pixels.empty() || image == place_tracking_.end()) return keypoints;
+  return keypoints;
+}
 
+Slam::LoopRays Slam::predictedLoopPairs(const LoopCandidate& loop, const Keyframe& current, const Pose2& T_a_b) const {
+  // An even sample of the current keypoints, each paired with the ray where T_a_b puts its ground point in the
+  // place's image (through the place's mount as used): a warp known to a pixel or so, for the tracker.
+  const Eigen::Isometry3d camera_a = mountFor(calibrated_mount_, used_mounts_[static_cast<size_t>(loop.frame_a)]).inverse();
+  const CameraIntrinsics& k = camera_.intrinsics();
+  const double margin = point_tracking_.window_px;
+  LoopRays pairs{0, loop.frame_a, loop.frame_b, {}, {}};
+  const size_t count = std::min(kRescuePairs, current.features.size());
+  for (size_t n = 0; n < count; ++n) {
+    const size_t i = n * current.features.size() / count;
+    const Eigen::Vector2d p = T_a_b * current.features.points[i];
+    const Eigen::Vector3d c = camera_a * Eigen::Vector3d(p.x(), p.y(), 0.0);
+    if (c.z() <= 0.0) continue;
+    const Eigen::Vector2d ray(c.x() / c.z(), c.y() / c.z());
+    const auto pixel = pixelOfRay(ray);
+    if (!pixel || pixel->x < margin || pixel->y < margin || pixel->x > k.width - margin || pixel->y > k.height - margin) continue;
+    pairs.a_rays.push_back(ray);
+    pairs.b_rays.push_back(current.features.rays[i]);
+  }
+  return pairs;
+}
+
+std::optional<Slam::LoopRays> Slam::trackLoopPairs(const LoopRays& keypoints, const TrackingImage& tracking) const {
+  const auto image = place_tracking_.find(keypoints.frame_a);
+  if (!config_.loop_closure.refine_by_tracked_points || tracking.pixels.empty() || image == place_tracking_.end()) return std::nullopt;
   // The warp of the current image onto the place's that the pairs make, and each current keypoint tracked from it.
   std::vector<cv::Point2d> current_px, reference_px;
   std::vector<size_t> pair_of;
@@ -58,31 +79,64 @@ std::optional<Slam::LoopRays> Slam::measureLoopPairs(LoopCandidate& loop, const 
     pair_of.push_back(i);
   }
   const size_t min_points = static_cast<size_t>(std::max(4, point_tracking_.min_points));
-  if (current_px.size() < min_points) return keypoints;
+  if (current_px.size() < min_points) return std::nullopt;
   constexpr double kWarpInlierPx = 3.0;  // keypoints scatter by most of a pixel; the tracker finds the rest
   const cv::Mat H = cv::findHomography(current_px, reference_px, cv::RANSAC, kWarpInlierPx);
-  if (H.empty()) return keypoints;
+  if (H.empty()) return std::nullopt;
   const std::vector<std::optional<cv::Point2d>> tracked = trackPoints(image->second, tracking, current_px, cv::Matx33d(H), point_tracking_);
-  LoopRays tracked_pairs{0, loop.frame_a, loop.frame_b, {}, {}};
+  LoopRays tracked_pairs{0, keypoints.frame_a, keypoints.frame_b, {}, {}};
   std::vector<Eigen::Vector2d> tracked_px;
   for (size_t i = 0; i < tracked.size(); ++i) {
     if (!tracked[i]) continue;
     tracked_px.emplace_back(tracked[i]->x, tracked[i]->y);
     tracked_pairs.b_rays.push_back(keypoints.b_rays[pair_of[i]]);
   }
-  if (tracked_px.size() < min_points) return keypoints;
+  if (tracked_px.size() < min_points) return std::nullopt;
   tracked_pairs.a_rays = camera_.normalisedRays(tracked_px);
+  return tracked_pairs;
+}
+
+std::optional<Slam::LoopRays> Slam::measureLoopPairs(LoopCandidate& loop, const Keyframe& current, const TrackingImage& tracking) const {
+  const Place* place = loop_closer_->places().find(loop.frame_a);
+  if (place == nullptr || static_cast<size_t>(loop.frame_a) >= used_mounts_.size() || !current.features.hasRays()) return std::nullopt;
+  const GroundFeatures reference = place->features();
+  if (!reference.hasRays()) return std::nullopt;
+  // Guided pairs around the loop's transform: the keypoints' pairs, kept when the images cannot do better.
+  const LoopRays keypoints = guidedLoopPairs(loop, current, reference, loop.T_a_b);
+  const std::optional<LoopRays> tracked_pairs = trackLoopPairs(keypoints, tracking);
+  if (!tracked_pairs) return keypoints;
   // The tracked points on the ground as the loop's own points were put there: through the mounts used then.
-  const auto fit = fitLoopRays(tracked_pairs, used_mounts_[static_cast<size_t>(loop.frame_a)], current.mount, loop.T_a_b);
+  const auto fit = fitLoopRays(*tracked_pairs, used_mounts_[static_cast<size_t>(loop.frame_a)], current.mount, loop.T_a_b);
   if (!fit) return keypoints;
   // The refit must agree with the keypoints' fit within what that fit allows (three standard deviations): else the
   // tracked points are not the loop's ground (a look-alike, something still in the image) and the keypoints stand.
-  const Pose2 change = loop.T_a_b.inverse() * fit->first;
+  const Pose2 change = loop.T_a_b.inverse() * fit->T_target_source;
   const double allowed_m = 3.0 * std::sqrt(std::max(loop.covariance(0, 0), loop.covariance(1, 1))) + config_.graph.min_sigma_m;
   const double allowed_rad = 3.0 * std::sqrt(loop.covariance(2, 2)) + config_.graph.min_sigma_rad;
   if (change.translation().norm() > allowed_m || std::abs(change.theta) > allowed_rad) return keypoints;
-  loop.T_a_b = fit->first;
-  loop.covariance = fit->second;
+  loop.T_a_b = fit->T_target_source;
+  loop.covariance = fit->covariance;
+  return tracked_pairs;
+}
+
+std::optional<Slam::LoopRays> Slam::rescueLoop(LoopCandidate& loop, const Keyframe& current, const TrackingImage& tracking) const {
+  if (!loop.coarse_T_a_b || floor_looks_repeated_) return std::nullopt;  // on a repeating floor a weak consensus may be a repetition
+  if (static_cast<size_t>(loop.frame_a) >= used_mounts_.size() || !current.features.hasRays()) return std::nullopt;
+  const Pose2& coarse = *loop.coarse_T_a_b;
+  const std::optional<LoopRays> tracked_pairs = trackLoopPairs(predictedLoopPairs(loop, current, coarse), tracking);
+  if (!tracked_pairs) return std::nullopt;
+  const auto fit = fitLoopRays(*tracked_pairs, used_mounts_[static_cast<size_t>(loop.frame_a)], current.mount, coarse);
+  // Gate 3 on the tracked points, and the transform the keypoints agreed on within their matching radius: points
+  // tracked to somewhere else slid off a look-alike.
+  const LoopClosureSettings& gates = config_.loop_closure;
+  if (!fit || fit->inliers < gates.min_inliers || fit->covarianceScore() > gates.max_covariance_score) return std::nullopt;
+  const Pose2 change = coarse.inverse() * fit->T_target_source;
+  if (change.translation().norm() > config_.outdoor.reference_match_radius_m || std::abs(change.theta) > kRescueAgreementRad) return std::nullopt;
+  loop.T_a_b = fit->T_target_source;
+  loop.covariance = fit->covariance;
+  loop.inliers = fit->inliers;
+  loop.covariance_score = fit->covarianceScore();
+  loop.rejected_by = LoopGate::none;
   return tracked_pairs;
 }
 
@@ -99,13 +153,14 @@ RigidEstimate Slam::fitRays(const LoopRays& pairs, const MountState& a_mount, co
                               odometry_fitting_);
 }
 
-std::optional<std::pair<Pose2, Eigen::Matrix3d>> Slam::fitLoopRays(const LoopRays& pairs, const MountState& a_mount, const MountState& b_mount,
-                                                                   const Pose2& T_guess) const {
+std::optional<RigidEstimate> Slam::fitLoopRays(const LoopRays& pairs, const MountState& a_mount, const MountState& b_mount,
+                                               const Pose2& T_guess) const {
   const GroundFeatures a = projectRays(pairs.a_rays, a_mount);
   const GroundFeatures b = projectRays(pairs.b_rays, b_mount);
-  const RigidEstimate fit = refineRigidTransform(a.points, b.points, T_guess, odometry_fitting_);
+  RigidEstimate fit = refineRigidTransform(a.points, b.points, T_guess, odometry_fitting_);
   if (!fit.ok()) return std::nullopt;
-  return std::make_pair(fit.T_target_source, fit.covariance + mountCovariance(fit.T_target_source, a, a_mount, b, b_mount));
+  fit.covariance += mountCovariance(fit.T_target_source, a, a_mount, b, b_mount);
+  return fit;
 }
 
 Eigen::Matrix3d Slam::mountCovariance(const Pose2& T_a_b, const GroundFeatures& a_points, const MountState& a_mount,
@@ -144,8 +199,8 @@ bool Slam::remeasureLoops() {
     const Pose2 guess = mount_corrections_[a].inverse() * edge.T_from_to * mount_corrections_[b];
     const auto fit = fitLoopRays(pairs, final_mounts_[a], final_mounts_[b], guess);
     if (!fit) continue;
-    graph_.remeasureEdge(pairs.edge, mount_corrections_[a] * fit->first * mount_corrections_[b].inverse(),
-                         informationFrom(fit->second, config_.graph.min_sigma_m, config_.graph.min_sigma_rad));
+    graph_.remeasureEdge(pairs.edge, mount_corrections_[a] * fit->T_target_source * mount_corrections_[b].inverse(),
+                         informationFrom(fit->covariance, config_.graph.min_sigma_m, config_.graph.min_sigma_rad));
   }
   return true;
 }
