@@ -134,6 +134,10 @@ std::optional<Slam::LoopRays> Slam::rescueLoop(LoopCandidate& loop, const Keyfra
   if (change.translation().norm() > config_.outdoor.reference_match_radius_m || std::abs(change.theta) > kRescueAgreementRad) return std::nullopt;
   loop.T_a_b = fit->T_target_source;
   loop.covariance = fit->covariance;
+  // How far it moves the current frame from the map's estimate (the failed fit's figure was of no transform).
+  const std::vector<Pose2>& poses = graph_.poses();
+  const Pose2 estimated = between(poses[static_cast<size_t>(loop.frame_a)], poses[static_cast<size_t>(loop.frame_b)]);
+  loop.correction_m = (loop.T_a_b.translation() - estimated.translation()).norm();
   loop.inliers = fit->inliers;
   loop.covariance_score = fit->covarianceScore();
   loop.rejected_by = LoopGate::none;
