@@ -48,6 +48,13 @@ struct LocalizationSettings {
   /// keyframe's pose almost never.
   double min_anchor_offset_m = 0.003;
   double min_anchor_offset_rad = 0.0175;
+  /// On a floor that repeats, a relocalization is confirmed only by localizations of frames at least this far apart by
+  /// odometry: two images of nearly the same ground match the same repetition as readily as the right place (0: any).
+  double repeated_floor_baseline_m = 0.05;
+  /// A localization becomes a graph edge from the nearest map keyframe; the edge is measured again on that keyframe's
+  /// own features, as a loop closure would be. Across a map bent by its drift, the features of several keyframes
+  /// agree with a pose a few degrees off any one of them.
+  bool measure_on_keyframe = true;
 };
 
 enum class LocalizationStatus { localized, too_few_votes, ambiguous, too_few_inliers, covariance, clustered };

@@ -481,6 +481,8 @@ void visitConfigFields(Config_& c, Visitor&& v) {
   v("localization", "every_frames", c.localization.every_frames, Range{1, 1e9});
   v("localization", "min_anchor_offset_m", c.localization.min_anchor_offset_m, kNonNegative);
   v("localization", "min_anchor_offset_rad", c.localization.min_anchor_offset_rad, kNonNegative);
+  v("localization", "repeated_floor_baseline_m", c.localization.repeated_floor_baseline_m, kNonNegative);
+  v("localization", "measure_on_keyframe", c.localization.measure_on_keyframe, Range{});
   v("outdoor", "reject_still", c.outdoor.reject_still, Range{});
   v("outdoor", "still_radius_px", c.outdoor.still_radius_px, Range{0.0, 50.0});
   v("outdoor", "moved_factor", c.outdoor.moved_factor, Range{1.0, 100.0});

@@ -327,16 +327,18 @@ std::vector<LoopCandidate> LoopCloser::relocalize(int frame, const GroundFeature
   const Localization localization = localizeOnMap(features, usable);
   if (!localization.ok() || onAnAnchorsPose(localization)) return rejoinNearby(frame, features, estimates);
   // One localization could be a lookalike; the next must agree with what odometry measured in between.
-  const PendingLocalization current{frame, localization};
+  PendingLocalization current{frame, localization, features};
   if (!pending_localization_ || segmentOf(pending_localization_->frame) != lost_segment ||
       !agreeWithOdometry(*pending_localization_, current, estimates)) {
-    pending_localization_ = current;
+    pending_localization_ = std::move(current);
     return {};
   }
-  const PendingLocalization earlier = *pending_localization_;
+  // Agreeing, but too near on a repeating floor: the earlier waits for a frame further on to confirm it.
+  if (!farEnoughApart(pending_localization_->frame, frame, estimates)) return {};
+  const PendingLocalization earlier = std::move(*pending_localization_);
   pending_localization_.reset();
   joinSegments(lost_segment, kMapSegment);
-  std::vector<LoopCandidate> joined = {candidateFrom(earlier.localization, earlier.frame), candidateFrom(localization, frame)};
+  std::vector<LoopCandidate> joined = {edgeOf(earlier), edgeOf(current)};
   recent_loops_.emplace_back(joined.back().frame_a, frame);
   if (recent_loops_.size() > kRecentLoops) recent_loops_.pop_front();
   return joined;
@@ -379,7 +381,7 @@ std::vector<LoopCandidate> LoopCloser::rejoinNearby(int frame, const GroundFeatu
     pending_rejoin_ = candidate;
     if (!earlier || segmentOf(earlier->frame_b) != lost_segment) return {};
     const auto placed = [&](const LoopCandidate& c) {
-      PendingLocalization p{c.frame_b, {}};
+      PendingLocalization p{c.frame_b, {}, {}};
       p.localization.T_map_robot = estimates[static_cast<size_t>(c.frame_a)] * c.T_a_b;
       return p;
     };
@@ -411,19 +413,18 @@ std::vector<LoopCandidate> LoopCloser::joinOrphanSegments(const std::vector<Pose
     for (size_t k = 0; k < tried; ++k) {
       const int anchor = members[k * (members.size() - 1) / (tried - 1)];
       const int frame = anchors[static_cast<size_t>(anchor)].frame;
-      const Localization localization =
-          localizeOnMap(feature_map_.featuresInAnchorFrame(anchor), usable);
+      const Localization localization = localizeOnMap(feature_map_.featuresInAnchorFrame(anchor), usable);
       if (!localization.ok() || onAnAnchorsPose(localization)) continue;
-      const PendingLocalization current{frame, localization};
+      const PendingLocalization current{frame, localization, feature_map_.featuresInAnchorFrame(anchor)};
       const auto agreeing = std::find_if(found.begin(), found.end(), [&](const PendingLocalization& earlier) {
-        return agreeWithOdometry(earlier, current, estimates);
+        return agreeWithOdometry(earlier, current, estimates) && farEnoughApart(earlier.frame, frame, estimates);
       });
       if (agreeing == found.end()) {
         found.push_back(current);
         continue;
       }
-      joined.push_back(candidateFrom(agreeing->localization, agreeing->frame));
-      joined.push_back(candidateFrom(localization, frame));
+      joined.push_back(edgeOf(*agreeing));
+      joined.push_back(edgeOf(current));
       joinSegments(segment, kMapSegment);
       break;
     }
@@ -438,6 +439,34 @@ bool LoopCloser::agreeWithOdometry(const PendingLocalization& a, const PendingLo
   const Pose2 disagreement = by_odometry.inverse() * by_localization;
   return disagreement.translation().norm() <= localization_.max_odometry_disagreement_m &&
          std::abs(disagreement.theta) <= localization_.max_odometry_disagreement_rad;
+}
+
+bool LoopCloser::farEnoughApart(int frame_a, int frame_b, const std::vector<Pose2>& estimates) const {
+  const double baseline = localization_.repeated_floor_baseline_m;
+  if (!floor_repeats_ || baseline <= 0.0) return true;
+  return between(estimates[static_cast<size_t>(frame_a)], estimates[static_cast<size_t>(frame_b)]).translation().norm() >= baseline;
+}
+
+LoopCandidate LoopCloser::edgeOf(const PendingLocalization& found) const {
+  // Twice the tolerance two localizations must agree within: how far the map's bending may put the pose off one
+  // keyframe's own view of it.
+  constexpr double kKeyframeReach = 2.0;
+  LoopCandidate candidate = candidateFrom(found.localization, found.frame);
+  const Place* place = localization_.measure_on_keyframe ? places_.find(candidate.frame_a) : nullptr;
+  if (place == nullptr || found.features.size() == 0) return candidate;  // a prior map's keyframes have no places
+  const TransformPrior around{candidate.T_a_b, kKeyframeReach * localization_.max_odometry_disagreement_m,
+                              kKeyframeReach * localization_.max_odometry_disagreement_rad};
+  // No BoW gate: the localization found the place.
+  const LoopCandidate measured = verify(candidate.frame_a, place->features(), found.frame, found.features,
+                                        std::numeric_limits<double>::infinity(), around, fitting_);
+  if (!measured.accepted()) return candidate;
+  candidate.matches = measured.matches;
+  candidate.inliers = measured.inliers;
+  candidate.T_a_b = measured.T_a_b;
+  candidate.covariance = measured.covariance;
+  candidate.covariance_score = measured.covariance_score;
+  candidate.ambiguity = measured.ambiguity;
+  return candidate;
 }
 
 void LoopCloser::joinSegments(int from, int to) {

@@ -190,8 +190,15 @@ class LoopCloser {
   struct PendingLocalization {
     int frame = 0;
     Localization localization;
+    GroundFeatures features;  ///< the frame's, for measuring the edge on the map keyframe (empty: not measured again)
   };
   LoopCandidate candidateFrom(const Localization& localization, int frame) const;
+  /// The localization as a graph edge from its map keyframe, measured on that keyframe's own features when they
+  /// confirm it (LocalizationSettings::measure_on_keyframe); else as localized on the whole map.
+  LoopCandidate edgeOf(const PendingLocalization& found) const;
+  /// On a floor that repeats, two localizations confirm each other only from frames this far apart
+  /// (LocalizationSettings::repeated_floor_baseline_m): images of nearly the same ground are one piece of evidence.
+  bool farEnoughApart(int frame_a, int frame_b, const std::vector<Pose2>& estimates) const;
   /// The lost frame against the map's places near its estimate, within the reach of the loss's unknown motion.
   std::vector<LoopCandidate> rejoinNearby(int frame, const GroundFeatures& features, const std::vector<Pose2>& estimates);
   /// The segment began right after a frame of the map segment: one unknown motion lies between them.
