@@ -87,7 +87,7 @@ std::vector<LoopCandidate> readCandidatesCsv(const std::string& path) {
       c.covariance_score = numberOrNan(cells[5]);
       static const std::map<std::string, LoopGate> gates = {{"none", LoopGate::none}, {"bow_score", LoopGate::bow_score},
                                                              {"matches", LoopGate::matches}, {"covariance", LoopGate::covariance},
-                                                             {"ambiguous", LoopGate::ambiguous}};
+                                                             {"ambiguous", LoopGate::ambiguous}, {"still", LoopGate::still}};
       const auto gate = gates.find(cells[6]);
       if (gate == gates.end()) throw InputError(path + ":" + std::to_string(number) + ": unknown gate '" + cells[6] + "'");
       c.rejected_by = gate->second;

@@ -45,7 +45,8 @@ struct LocalizationSettings {
   /// While tracking (lost, or on a prior map), a localization this close to a map keyframe's own pose, and
   /// within min_anchor_offset_rad of its heading, is refused: features fixed to the camera (the robot's shadow,
   /// dirt, bumper) left in a keyframe put every later image there, while a true revisit lands exactly on a
-  /// keyframe's pose almost never.
+  /// keyframe's pose almost never. So is a loop closure that puts the current frame this close to the earlier one's
+  /// pose (its gate `still`).
   double min_anchor_offset_m = 0.003;
   double min_anchor_offset_rad = 0.0175;
   /// On a floor that repeats, a relocalization is confirmed only by localizations of frames at least this far apart by

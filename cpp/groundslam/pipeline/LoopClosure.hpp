@@ -80,7 +80,9 @@ struct LoopClosureSettings {
 };
 
 /// Which gate a candidate failed ("" when accepted).
-enum class LoopGate { none, bow_score, matches, covariance, ambiguous };
+/// The gate that rejected a candidate. `still`: the fit puts the current frame on the earlier frame's own pose
+/// (LocalizationSettings::min_anchor_offset_*), as features fixed to the camera do.
+enum class LoopGate { none, bow_score, matches, covariance, ambiguous, still };
 const char* loopGateName(LoopGate gate);
 
 /// One verified candidate: frame_a (earlier) against frame_b (current).
@@ -207,6 +209,8 @@ class LoopCloser {
   bool agreeWithOdometry(const PendingLocalization& a, const PendingLocalization& b, const std::vector<Pose2>& estimates) const;
   /// A localization on a map keyframe's own pose (LocalizationSettings::min_anchor_offset_*): camera artifacts.
   bool onAnAnchorsPose(const Localization& localization) const;
+  /// The same for a loop transform: the current frame on the earlier frame's own pose.
+  bool onTheEarlierPose(const Pose2& T_a_b) const;
   /// A global localization on the usable map keyframes, with the vote rule of the floor seen so far.
   Localization localizeOnMap(const GroundFeatures& features, const AnchorFilter& usable) const;
 

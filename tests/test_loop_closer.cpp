@@ -1,6 +1,6 @@
-// What a relocalization adds to the graph: edges measured on their map keyframe's own features, and on a floor that
-// repeats, confirmed only by frames that see different ground. Driven through LoopCloser directly, so that the map's
-// estimates can be bent on purpose.
+// LoopCloser driven directly, so that the map's estimates and the frames' features can be set on purpose: what a
+// relocalization adds to the graph (edges measured on their map keyframe's own features; on a floor that repeats,
+// confirmed only by frames that see different ground) and the gate against features fixed to the camera.
 #include <cmath>
 #include <cstdio>
 #include <memory>
@@ -140,4 +140,51 @@ TEST(RelocalizationEdges, OnAFloorThatRepeatsTheConfirmingFramesSeeDifferentGrou
     EXPECT_LT(m, 0.002);
     EXPECT_LT(deg, 0.3);
   }
+}
+
+namespace {
+
+/// A loop candidate between frame 0 of an asphalt loop and a later frame whose features are frame 0's, each moved by
+/// `T_0_later`'s inverse (the identity: every feature where it was in the image, as the robot's shadow, lens dirt or
+/// bumper stay). The robot's estimate puts the later frame 1 cm from frame 0; in between it drove elsewhere.
+LoopCandidate candidateWithFrameZeroSeenAt(const Pose2& T_0_later) {
+  const sim::SequenceSimulator simulator(asphaltLoop());
+  Config config;
+  config.camera = cameraConfigOf(asphaltLoop().camera, asphaltLoop().mounting_height_m);
+  const FramePreparer preparer(config);
+  LoopCloser closer(config.loop_closure, shippedVocabulary(), config.matching, config.odometry, config.localization);
+  const auto& truth = simulator.groundTruth();
+  const GroundFeatures first = preparer.prepare(simulator.renderFrame(0), 0).features;
+  const GroundFeatures elsewhere = preparer.prepare(simulator.renderFrame(100), 1).features;
+  std::vector<Pose2> estimates = {truth[0]};
+  closer.process(0, kMapSegment, first, estimates);
+  const int later = config.loop_closure.database_delay_frames + 1;
+  for (int k = 1; k < later; ++k) {
+    estimates.push_back(truth[100]);
+    closer.process(k, kMapSegment, elsewhere, estimates);
+  }
+  GroundFeatures moved = first;
+  for (Eigen::Vector2d& p : moved.points) p = T_0_later.inverse() * p;
+  estimates.push_back(truth[0] * Pose2(0.01, 0.0, 0.0));
+  for (const LoopCandidate& c : closer.process(later, kMapSegment, moved, estimates)) {
+    if (c.frame_a == 0) return c;
+  }
+  return {};
+}
+
+}  // namespace
+
+TEST(LoopGates, AFitOnTheEarlierFramesOwnPoseIsRefusedAsStill) {
+  const LoopCandidate still = candidateWithFrameZeroSeenAt(Pose2());
+  EXPECT_EQ(still.frame_a, 0);
+  EXPECT_EQ(still.rejected_by, LoopGate::still) << loopGateName(still.rejected_by);
+  EXPECT_LT(still.T_a_b.translation().norm(), 1e-4);
+  // 4 mm and 1.5 degrees off the earlier pose: outside localization.min_anchor_offset_* (3 mm, 1 degree), accepted.
+  const Pose2 moved(0.004, 0.0, 1.5 * kDegree);
+  const LoopCandidate revisit = candidateWithFrameZeroSeenAt(moved);
+  EXPECT_TRUE(revisit.accepted()) << loopGateName(revisit.rejected_by);
+  EXPECT_LT((revisit.T_a_b.translation() - moved.translation()).norm(), 1e-4);
+  EXPECT_NEAR(revisit.T_a_b.theta, moved.theta, 1e-4);
+  // Only the heading outside: 1 mm off and turned 1.5 degrees is a revisit too.
+  EXPECT_TRUE(candidateWithFrameZeroSeenAt(Pose2(0.001, 0.0, 1.5 * kDegree)).accepted());
 }
