@@ -205,6 +205,10 @@ const char* localizationStatusName(LocalizationStatus status) {
   return "unknown";
 }
 
+bool onTheEarlierPose(const Pose2& T_a_b, const LocalizationSettings& settings) {
+  return T_a_b.translation().norm() < settings.min_anchor_offset_m && std::abs(T_a_b.theta) < settings.min_anchor_offset_rad;
+}
+
 Localization localizeGlobally(const FeatureMap& map, const GroundFeatures& query, const LocalizationSettings& s,
                               const FitSettings& fitting, const AnchorFilter& usable) {
   Localization result;

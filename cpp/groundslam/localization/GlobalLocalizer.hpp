@@ -75,6 +75,10 @@ struct Localization {
   bool ok() const { return status == LocalizationStatus::localized; }
 };
 
+/// `T_a_b` puts frame b on frame a's own pose, within settings.min_anchor_offset_*: what features fixed to the camera
+/// (the robot's shadow, lens dirt, bumper) say of any two frames.
+bool onTheEarlierPose(const Pose2& T_a_b, const LocalizationSettings& settings);
+
 /// Which anchors may vote: e.g. only those of segments other than the lost one.
 using AnchorFilter = std::vector<bool>;
 

@@ -235,7 +235,7 @@ LoopCandidate LoopCloser::verify(int frame_a, const GroundFeatures& a, int frame
   } else if (candidate.ambiguity > settings_.max_ambiguity) {
     // Not in the paper: on a repetitive floor a transform shifted by one tile fits almost as well.
     candidate.rejected_by = LoopGate::ambiguous;
-  } else if (onTheEarlierPose(candidate.T_a_b)) {
+  } else if (onTheEarlierPose(candidate.T_a_b, localization_)) {
     // Not in the paper: the robot's shadow, lens dirt or bumper, left in both frames' features, match where they
     // stand in the image and put the robot back on the earlier pose; a true revisit lands there almost never
     // (measured: 1 of every loop accepted over the outdoor and photo sets, 16 cm and 35° off the truth).
@@ -249,13 +249,13 @@ std::optional<Pose2> LoopCloser::coarseTransform(const RigidEstimate& fit, const
                                                  FitSettings fitting) const {
   if (settings_.rescue_min_inliers <= 0 || fit.inliers < settings_.rescue_min_inliers) return std::nullopt;
   if (fit.ok()) {
-    if (fit.ambiguity() > settings_.max_ambiguity || onTheEarlierPose(fit.T_target_source)) return std::nullopt;
+    if (fit.ambiguity() > settings_.max_ambiguity || onTheEarlierPose(fit.T_target_source, localization_)) return std::nullopt;
     return fit.T_target_source;
   }
   // Too few inliers for the gate: the same consensus, fitted with the smaller count allowed.
   fitting.min_inliers = settings_.rescue_min_inliers;
   const RigidEstimate coarse = fitRigidTransform(points_a, points_b, fitting, prior);
-  if (!coarse.ok() || coarse.ambiguity() > settings_.max_ambiguity || onTheEarlierPose(coarse.T_target_source)) return std::nullopt;
+  if (!coarse.ok() || coarse.ambiguity() > settings_.max_ambiguity || onTheEarlierPose(coarse.T_target_source, localization_)) return std::nullopt;
   return coarse.T_target_source;
 }
 
@@ -324,10 +324,8 @@ Localization LoopCloser::localizeOnMap(const GroundFeatures& features, const Anc
   return localizeGlobally(feature_map_, features, settings, fitting_, usable);
 }
 
-bool LoopCloser::onAnAnchorsPose(const Localization& localization) const { return onTheEarlierPose(localization.T_anchor_robot); }
-
-bool LoopCloser::onTheEarlierPose(const Pose2& T_a_b) const {
-  return T_a_b.translation().norm() < localization_.min_anchor_offset_m && std::abs(T_a_b.theta) < localization_.min_anchor_offset_rad;
+bool LoopCloser::onAnAnchorsPose(const Localization& localization) const {
+  return onTheEarlierPose(localization.T_anchor_robot, localization_);
 }
 
 std::vector<LoopCandidate> LoopCloser::relocalize(int frame, const GroundFeatures& features, const std::vector<Pose2>& estimates) {

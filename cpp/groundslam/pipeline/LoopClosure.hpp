@@ -209,8 +209,6 @@ class LoopCloser {
   bool agreeWithOdometry(const PendingLocalization& a, const PendingLocalization& b, const std::vector<Pose2>& estimates) const;
   /// A localization on a map keyframe's own pose (LocalizationSettings::min_anchor_offset_*): camera artifacts.
   bool onAnAnchorsPose(const Localization& localization) const;
-  /// The same for a loop transform: the current frame on the earlier frame's own pose.
-  bool onTheEarlierPose(const Pose2& T_a_b) const;
   /// A global localization on the usable map keyframes, with the vote rule of the floor seen so far.
   Localization localizeOnMap(const GroundFeatures& features, const AnchorFilter& usable) const;
 

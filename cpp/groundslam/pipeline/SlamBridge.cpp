@@ -23,11 +23,17 @@ void Slam::bridgeLoss(const Keyframe& current, const PreparedFrame& prepared, Fr
     return;
   }
   StageTimer timer;
+  // Not a bridge that puts the robot back on the last tracked pose: odometry would not have failed at rest, while the
+  // robot's shadow, lens dirt and bumper say exactly that of any two frames (measured on a smooth concrete photo
+  // outdoors: a 90-degree turn on the spot bridged as rest, the rest of the run 91 degrees off).
+  const auto moved = [&](std::optional<Bridge> found) {
+    return found && onTheEarlierPose(found->T_tracked_current, config_.localization) ? std::nullopt : found;
+  };
   std::optional<Bridge> bridge;
   // The loss frame itself has just failed against the last tracked frame: only the search can say more of it.
   if (frames_since >= 2) {
-    bridge = bridgeByFeatures(current);
-    if (!bridge) bridge = bridgeByAlignment(current, prepared.alignment);
+    bridge = moved(bridgeByFeatures(current));
+    if (!bridge) bridge = moved(bridgeByAlignment(current, prepared.alignment));
   }
   if (!bridge) bridge = confirmedSearch(current, prepared);
   result.times.loop_ms += timer.lap();
@@ -113,7 +119,7 @@ std::optional<Slam::Bridge> Slam::bridgeBySearch(const Keyframe& current) const 
 std::optional<Slam::Bridge> Slam::confirmedSearch(const Keyframe& current, const PreparedFrame& prepared) {
   std::optional<Bridge> found = bridgeBySearch(current);
   if (!found) found = bridgeBySpectra(prepared.turn, prepared.turn_scale);
-  if (!found) return std::nullopt;
+  if (!found || onTheEarlierPose(found->T_tracked_current, config_.localization)) return std::nullopt;  // as in bridgeLoss
   const std::optional<PendingBridge> earlier = pending_search_;
   pending_search_ = PendingBridge{current.index, *found};
   if (!earlier || earlier->frame < lost_since_) return std::nullopt;  // none yet in this lost segment
