@@ -23,12 +23,7 @@ void Slam::bridgeLoss(const Keyframe& current, const PreparedFrame& prepared, Fr
     return;
   }
   StageTimer timer;
-  // Not a bridge that puts the robot back on the last tracked pose: odometry would not have failed at rest, while the
-  // robot's shadow, lens dirt and bumper say exactly that of any two frames (measured on a smooth concrete photo
-  // outdoors: a 90-degree turn on the spot bridged as rest, the rest of the run 91 degrees off).
-  const auto moved = [&](std::optional<Bridge> found) {
-    return found && onTheEarlierPose(found->T_tracked_current, config_.localization) ? std::nullopt : found;
-  };
+  const auto moved = [&](std::optional<Bridge> found) { return found && backOnTheTrackedPose(*found) ? std::nullopt : found; };
   std::optional<Bridge> bridge;
   // The loss frame itself has just failed against the last tracked frame: only the search can say more of it.
   if (frames_since >= 2) {
@@ -51,6 +46,13 @@ void Slam::bridgeLoss(const Keyframe& current, const PreparedFrame& prepared, Fr
   }
   loop_closer_->joinSegments(segment_, kMapSegment);
   joinMap(result);
+}
+
+bool Slam::backOnTheTrackedPose(const Bridge& bridge) const {
+  // A robot that was moving does not stop dead at a loss, while its shadow, lens dirt and bumper say it did of any two
+  // frames (measured on a smooth concrete photo outdoors: a 90-degree turn on the spot bridged as rest, the rest of
+  // the run 91 degrees off). A robot that was standing still may still be.
+  return onTheEarlierPose(bridge.T_tracked_current, config_.localization) && !onTheEarlierPose(usualStep(), config_.localization);
 }
 
 std::optional<Slam::Bridge> Slam::bridgeByFeatures(const Keyframe& current) const {
@@ -119,7 +121,7 @@ std::optional<Slam::Bridge> Slam::bridgeBySearch(const Keyframe& current) const 
 std::optional<Slam::Bridge> Slam::confirmedSearch(const Keyframe& current, const PreparedFrame& prepared) {
   std::optional<Bridge> found = bridgeBySearch(current);
   if (!found) found = bridgeBySpectra(prepared.turn, prepared.turn_scale);
-  if (!found || onTheEarlierPose(found->T_tracked_current, config_.localization)) return std::nullopt;  // as in bridgeLoss
+  if (!found || backOnTheTrackedPose(*found)) return std::nullopt;
   const std::optional<PendingBridge> earlier = pending_search_;
   pending_search_ = PendingBridge{current.index, *found};
   if (!earlier || earlier->frame < lost_since_) return std::nullopt;  // none yet in this lost segment
