@@ -272,9 +272,9 @@ TEST(Relocalization, AfterABlankFrameImagesThatStayStillAreNotTakenForRestButASt
   // The same blank frame 120. Then frames 121-124 show frame 119's image again, as the robot's shadow, lens dirt and
   // bumper would on a floor too smooth to show its own motion: nothing joins the robot to the map at rest there, and
   // it is found once it shows new ground. A robot that really stood still (frames 100-139 all show frame 100's
-  // ground) is bridged within two frames, as before bridges that put a moving robot back on the last tracked pose
-  // were refused (Slam::backOnTheTrackedPose). Measured: both runs give the same statuses without that rule, which
-  // the moving run's identical images do not reach; the test guards that the rule spares a robot that stood still.
+  // ground) is joined within two frames, as before bridges that put the robot back on the last tracked pose were
+  // refused (Slam::backOnTheTrackedPose). Measured: both runs give the same statuses without that rule, which the
+  // moving run's identical images do not reach; the test guards that the rule leaves a robot that stood still found.
   auto settings = session("asphalt", sim::PathKind::loop, 400, 5);
   settings.ground_seed.reset();
   const sim::SequenceSimulator simulator(settings);

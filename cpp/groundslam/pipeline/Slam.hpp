@@ -159,8 +159,8 @@ class Slam {
     Pose2 T_tracked_current;
     Eigen::Matrix3d covariance;
   };
-  /// The bridge puts the robot back on the last tracked pose (within localization.min_anchor_offset_*), though it was
-  /// moving: what features fixed to the camera say. Such a bridge is refused.
+  /// The bridge puts the robot back on the last tracked pose (within localization.min_anchor_offset_*): what features
+  /// fixed to the camera say. Such a bridge is refused.
   bool backOnTheTrackedPose(const Bridge& bridge) const;
   /// The current frame's features fitted to the last tracked frame's, believed as a loop closure would be.
   std::optional<Bridge> bridgeByFeatures(const Keyframe& current) const;
