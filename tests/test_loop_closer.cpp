@@ -1,9 +1,11 @@
 // LoopCloser driven directly, so that the map's estimates and the frames' features can be set on purpose: what a
 // relocalization adds to the graph (edges measured on their map keyframe's own features; on a floor that repeats,
 // confirmed only by frames that see different ground) and the gate against features fixed to the camera.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <memory>
+#include <utility>
 #include <vector>
 
 #include <gtest/gtest.h>

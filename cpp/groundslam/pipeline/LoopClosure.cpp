@@ -238,7 +238,7 @@ LoopCandidate LoopCloser::verify(int frame_a, const GroundFeatures& a, int frame
   } else if (onTheEarlierPose(candidate.T_a_b, localization_)) {
     // Not in the paper: the robot's shadow, lens dirt or bumper, left in both frames' features, match where they
     // stand in the image and put the robot back on the earlier pose; a true revisit lands there almost never
-    // (measured: 1 of every loop accepted over the outdoor and photo sets, 16 cm and 35° off the truth).
+    // (measured over 108 outdoor and photo runs: the one accepted loop that close was 16 cm and 35° off the truth).
     candidate.rejected_by = LoopGate::still;
   }
   return candidate;
@@ -421,9 +421,10 @@ std::vector<LoopCandidate> LoopCloser::joinOrphanSegments(const std::vector<Pose
     for (size_t k = 0; k < tried; ++k) {
       const int anchor = members[k * (members.size() - 1) / (tried - 1)];
       const int frame = anchors[static_cast<size_t>(anchor)].frame;
-      const Localization localization = localizeOnMap(feature_map_.featuresInAnchorFrame(anchor), usable);
+      GroundFeatures seen = feature_map_.featuresInAnchorFrame(anchor);
+      const Localization localization = localizeOnMap(seen, usable);
       if (!localization.ok() || onAnAnchorsPose(localization)) continue;
-      const PendingLocalization current{frame, localization, feature_map_.featuresInAnchorFrame(anchor)};
+      const PendingLocalization current{frame, localization, std::move(seen)};
       const auto agreeing = std::find_if(found.begin(), found.end(), [&](const PendingLocalization& earlier) {
         return agreeWithOdometry(earlier, current, estimates) && farEnoughApart(earlier.frame, frame, estimates);
       });

@@ -79,9 +79,8 @@ struct LoopClosureSettings {
   bool remeasure_at_end = true;
 };
 
-/// Which gate a candidate failed ("" when accepted).
-/// The gate that rejected a candidate. `still`: the fit puts the current frame on the earlier frame's own pose
-/// (LocalizationSettings::min_anchor_offset_*), as features fixed to the camera do.
+/// Which gate a candidate failed ("" when accepted). `still`: the fit puts the current frame on the earlier frame's own
+/// pose (LocalizationSettings::min_anchor_offset_*), as features fixed to the camera do.
 enum class LoopGate { none, bow_score, matches, covariance, ambiguous, still };
 const char* loopGateName(LoopGate gate);
 
