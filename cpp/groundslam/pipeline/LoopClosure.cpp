@@ -465,17 +465,12 @@ LoopCandidate LoopCloser::edgeOf(const PendingLocalization& found) const {
   if (place == nullptr || found.features.size() == 0) return candidate;  // a prior map's keyframes have no places
   const TransformPrior around{candidate.T_a_b, kKeyframeReach * localization_.max_odometry_disagreement_m,
                               kKeyframeReach * localization_.max_odometry_disagreement_rad};
-  // No BoW gate: the localization found the place.
-  const LoopCandidate measured = verify(candidate.frame_a, place->features(), found.frame, found.features,
-                                        std::numeric_limits<double>::infinity(), around, fitting_);
+  // No BoW gate: the localization found the place (and, as a localization, the edge reports no BoW score).
+  LoopCandidate measured = verify(candidate.frame_a, place->features(), found.frame, found.features,
+                                  std::numeric_limits<double>::infinity(), around, fitting_);
   if (!measured.accepted()) return candidate;
-  candidate.matches = measured.matches;
-  candidate.inliers = measured.inliers;
-  candidate.T_a_b = measured.T_a_b;
-  candidate.covariance = measured.covariance;
-  candidate.covariance_score = measured.covariance_score;
-  candidate.ambiguity = measured.ambiguity;
-  return candidate;
+  measured.bow_score = candidate.bow_score;
+  return measured;
 }
 
 void LoopCloser::joinSegments(int from, int to) {
