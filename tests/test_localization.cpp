@@ -692,6 +692,46 @@ TEST(GlobalLocalization, AFrameLocalizesOnAMapOfItselfAtAnyPoseAndHeading) {
   EXPECT_FALSE(none.ok());
 }
 
+TEST(GlobalLocalization, APoseOnlyTheFeaturesNearnessConfirmsIsRefused) {
+  // Guided re-matching pairs each feature with the map features within a few millimetres of where the peak puts it,
+  // a lone one whatever its descriptor: on a dense map, nearness alone "confirms" any pose. A frame's features on a
+  // map of themselves, all but `kept` of them with descriptors of another floor's features: the kept ones vote the
+  // peak, the others are paired by nearness alone. The pose needs localization.min_strong_inliers (15) inliers
+  // whose descriptors agree within strong_hamming (40) bits.
+  const auto settings = session("carpet", sim::PathKind::loop, 10, 1);
+  const sim::SequenceSimulator simulator(settings);
+  const FramePreparer preparer(configFor(settings));
+  const GroundFeatures features = preparer.prepare(simulator.renderFrame(0), 0).features;
+  auto other_settings = session("asphalt", sim::PathKind::loop, 10, 9);
+  other_settings.ground_seed = 99;
+  const GroundFeatures others = preparer.prepare(sim::SequenceSimulator(other_settings).renderFrame(0), 0).features;
+  ASSERT_GE(others.size(), features.size());
+  const Pose2 T_map_robot(0.4, -0.1, 1.2);
+  FeatureMap map(shippedVocabulary());
+  map.addAnchor(0, T_map_robot, 0, features);
+  const auto localizedKeeping = [&](int kept, bool strong_asked) {
+    GroundFeatures query = features;
+    query.descriptors = features.descriptors.clone();
+    for (int i = kept; i < query.descriptors.rows; ++i) others.descriptors.row(i).copyTo(query.descriptors.row(i));
+    LocalizationSettings s;
+    if (!strong_asked) s.min_strong_inliers = 0;
+    return localizeGlobally(map, query, s, Config{}.odometry);
+  };
+  // 12 agreeing features vote a peak; nearness pairs enough of the rest to pass min_inliers.
+  const Localization by_nearness = localizedKeeping(12, false);
+  EXPECT_TRUE(by_nearness.ok()) << localizationStatusName(by_nearness.status);
+  EXPECT_GE(by_nearness.inliers, 30);  // localization.min_inliers
+  EXPECT_LT(by_nearness.strong_inliers, 15);
+  const Localization refused = localizedKeeping(12, true);
+  EXPECT_EQ(refused.status, LocalizationStatus::too_few_inliers);
+  // 40 agreeing features: localized, exactly.
+  const Localization agreeing = localizedKeeping(40, true);
+  ASSERT_TRUE(agreeing.ok()) << localizationStatusName(agreeing.status);
+  EXPECT_GE(agreeing.strong_inliers, 30);
+  EXPECT_LT((agreeing.T_map_robot.translation() - T_map_robot.translation()).norm(), 1e-4);
+  EXPECT_LT(std::abs(wrapAngle(agreeing.T_map_robot.theta - T_map_robot.theta)), 1e-3);
+}
+
 TEST(Relocalization, TheRobotsOwnArtifactsStayOutOfTheMap) {
   // The heavy outdoor look: a dark shadow, dirt on the lens, a saturating glare and a quarter of the image
   // hidden by a bumper with bolts. Those stay at the same pixels in every image; if the map kept them, any

@@ -243,6 +243,7 @@ const char* fitStatusName(FitStatus status) {
     case FitStatus::solver_failed: return "solver_failed";
     case FitStatus::ambiguous: return "ambiguous";
     case FitStatus::implausible_motion: return "implausible_motion";
+    case FitStatus::still: return "still";
   }
   return "unknown";
 }

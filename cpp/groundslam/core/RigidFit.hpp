@@ -43,8 +43,9 @@ struct TransformPrior {
 };
 
 /// `ambiguous`: set by callers that refuse a fit another transform explains almost as well (repetitive floors);
-/// `implausible_motion`: set by callers that refuse a motion far from the one the robot was making.
-enum class FitStatus { ok, too_few_matches, too_few_inliers, degenerate, solver_failed, ambiguous, implausible_motion };
+/// `implausible_motion`: set by callers that refuse a motion far from the one the robot was making;
+/// `still`: set by callers that refuse a fit leaving every match in place while the images show the ground moving.
+enum class FitStatus { ok, too_few_matches, too_few_inliers, degenerate, solver_failed, ambiguous, implausible_motion, still };
 const char* fitStatusName(FitStatus status);
 
 struct RigidEstimate {

@@ -149,6 +149,7 @@ GroundFeatures mapFeaturesAround(const FeatureMap& map, const Eigen::Vector2d& w
 struct Verified {
   RigidEstimate fit;
   std::vector<Eigen::Vector2d> inlier_query_points;
+  int strong_inliers = 0;  ///< inliers whose descriptors are within settings.strong_hamming bits
 };
 
 /// Robust fit of the pairs that voted for a peak, refined by guided re-matching in the predicted footprint.
@@ -175,10 +176,11 @@ std::optional<Verified> verifyPeak(const FeatureMap& map, const GroundFeatures& 
     source.push_back(query.points[static_cast<size_t>(m.query)]);
   }
   const TransformPrior around_coarse{coarse.T_target_source, s.match_radius_m, 2.0 * M_PI / 180.0};
-  Verified verified{fitRigidTransform(target, source, fitting, around_coarse), {}};
+  Verified verified{fitRigidTransform(target, source, fitting, around_coarse), {}, 0};
   for (size_t i = 0; i < target.size(); ++i) {
     if ((verified.fit.T_target_source * source[i] - target[i]).norm() <= fitting.ransac_inlier_m) {
       verified.inlier_query_points.push_back(source[i]);
+      verified.strong_inliers += matches[i].distance <= s.strong_hamming ? 1 : 0;
     }
   }
   return verified;
@@ -248,7 +250,8 @@ Localization localizeGlobally(const FeatureMap& map, const GroundFeatures& query
     if (p != winner) rival_votes = std::max(rival_votes, peaks[p].votes);
   }
   result.runner_up_votes = rival_votes;
-  if (result.inliers < s.min_inliers) {
+  result.strong_inliers = best.strong_inliers;
+  if (result.inliers < s.min_inliers || best.strong_inliers < s.min_strong_inliers) {
     result.status = LocalizationStatus::too_few_inliers;
   } else if (static_cast<double>(rival) > s.max_rival_ratio * static_cast<double>(result.inliers) ||
              static_cast<double>(rival_votes) > voteRatioFor(rival, s) * static_cast<double>(result.votes)) {

@@ -119,6 +119,16 @@ struct OdometryChecks {
   double align_max_spread_m = 0.002;
   double align_sigma_m = 0.005;
   double align_sigma_rad = 0.005;
+  /// An alignment that moves the robot less than this share of its usual step (before any step was measured: less
+  /// than a still feature's radius times outdoor.moved_factor) is not believed, unless it turns sharply on the spot:
+  /// the robot's shadow and glare, and a smooth floor's sameness, align best near rest. 0: any.
+  double align_min_step_share = 0.5;
+  /// A fit that leaves every match in place (the robot at rest) is refuted when the two images' spectra, less the mean
+  /// of the recent images, register with a clear peak (bridge_spectral_min_peak) at a shift of the ground: on a floor
+  /// too faint to match, the robot's shadow edge, lens dirt and bumper are all that match, and they say "at rest"
+  /// while it drives. The images are then aligned from the spectra's motion (`aligned`), else the frame's motion is
+  /// not known (`fallback_still`, or `lost_still` with loop closure). false: rest is never checked.
+  bool rest_check_by_spectra = true;
   /// A fit with fewer inliers than this is checked by aligning the images from its motion: an alignment believed
   /// as above that ends more than align_check_m or align_check_rad away replaces it (the frame says `aligned`)
   /// when the fit's matches support it nearly as well: at least align_check_support times as many of them lie
@@ -395,6 +405,8 @@ void visitConfigFields(Config_& c, Visitor&& v) {
   v("odometry", "align_max_spread_m", c.odometry_checks.align_max_spread_m, kPositive);
   v("odometry", "align_sigma_m", c.odometry_checks.align_sigma_m, kNonNegative);
   v("odometry", "align_sigma_rad", c.odometry_checks.align_sigma_rad, kNonNegative);
+  v("odometry", "align_min_step_share", c.odometry_checks.align_min_step_share, kNonNegative);
+  v("odometry", "rest_check_by_spectra", c.odometry_checks.rest_check_by_spectra, Range{});
   v("odometry", "align_check_below_inliers", c.odometry_checks.align_check_below_inliers, Range{0, 1000000});
   v("odometry", "align_check_m", c.odometry_checks.align_check_m, kNonNegative);
   v("odometry", "align_check_rad", c.odometry_checks.align_check_rad, kNonNegative);
@@ -471,6 +483,8 @@ void visitConfigFields(Config_& c, Visitor&& v) {
   v("localization", "max_vote_ratio", c.localization.max_vote_ratio, Range{0.0, 1.0});
   v("localization", "unrepeated_max_vote_ratio", c.localization.unrepeated_max_vote_ratio, Range{0.0, 1.0});
   v("localization", "min_inliers", c.localization.min_inliers, Range{3, 1e9});
+  v("localization", "strong_hamming", c.localization.strong_hamming, Range{0, 256});
+  v("localization", "min_strong_inliers", c.localization.min_strong_inliers, Range{0, 1e9});
   v("localization", "max_covariance_score", c.localization.max_covariance_score, Range{-30.0, 30.0});
   v("localization", "min_spread", c.localization.min_spread, Range{0.0, 1.0});
   v("localization", "match_radius_m", c.localization.match_radius_m, kPositive);

@@ -88,6 +88,8 @@ FrameResult Slam::process(PreparedFrame prepared) {
   if (previous_) {
     OdometryEdge odometry = estimateOdometry(*previous_, current, prepared.matches_to_previous, prepared.alignment, result);
     if (odometry.fallback && !odometry.turn_measured) turnBySpectra(odometry, prepared.turn);
+    // Not in the paper: every match in place while the images show the ground moving is the robot's own artifacts.
+    if (auto moving = restRefuted(*previous_, current, odometry, prepared)) odometry = std::move(*moving);
     // Only where something already stayed still (a still match, an artifact cell): a clean floor pays nothing.
     const bool artifacts_seen = result.still_matches > 0 || artifact_mask_.artifactCells() > 0;
     if (!odometry.fallback && artifacts_seen) still = stillFeatures(*previous_, current, odometry.T_prev_curr);
@@ -310,7 +312,8 @@ void Slam::startSegment(const OdometryEdge& failed) {
   // Not after a motion unlike the robot's on a floor the images show repeating: frames dropped without a trace
   // leave the gap's length unknown, and a bridge lands one repetition short of it as readily as right.
   const bool unknown_gap = failed.fit_status == FitStatus::implausible_motion && floor_looks_repeated_;
-  bridgeable_loss_ = (tooLittleEvidence(failed.fit_status) || failed.fit_status == FitStatus::implausible_motion) && !repeatedFloor(to) &&
+  bridgeable_loss_ = (tooLittleEvidence(failed.fit_status) || failed.fit_status == FitStatus::implausible_motion ||
+                      failed.fit_status == FitStatus::still) && !repeatedFloor(to) &&
                      !unknown_gap;
   loop_closer_->trackingLost(graph_.poses());
   pending_search_.reset();

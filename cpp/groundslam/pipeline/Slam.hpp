@@ -116,6 +116,13 @@ class Slam {
   /// robot's usual steps and from several times as many (odometry.align_*; an alignment with a rival is not believed),
   /// or nothing (pipeline/SlamAlignment.cpp).
   std::optional<OdometryEdge> odometryByAlignment(const Keyframe& previous, const Keyframe& current, const AlignmentImage& alignment) const;
+  /// False when an aligned motion leaves the robot nearly where it was without a sharp turn (odometry.align_min_step_share).
+  bool movedTheRobot(const Pose2& T_prev_curr) const;
+  /// A fit that leaves every match in place, or an alignment every keypoint, while the images' spectra show the
+  /// ground moving (odometry.rest_check_by_spectra): the motion the images measure from there (`aligned`), else a fallback
+  /// (FitStatus::still) assuming the spectra's motion. None when rest stands.
+  std::optional<OdometryEdge> restRefuted(const Keyframe& previous, const Keyframe& current, const OdometryEdge& odometry,
+                                          const PreparedFrame& prepared) const;
   /// What the images say of a fit: not checked (enough inliers), it agrees, the aligned motion replaces it, or nothing.
   struct FitCheck {
     enum class Outcome { not_checked, confirmed, replaced, unconfirmed } outcome = Outcome::not_checked;
@@ -175,6 +182,9 @@ class Slam {
   std::optional<Bridge> confirmedSearch(const Keyframe& current, const PreparedFrame& prepared);
   /// The current image registered with the last tracked frame's by their spectra (odometry.bridge_spectral_min_peak).
   std::optional<Bridge> bridgeBySpectra(const cv::Mat& turn_image, double turn_scale) const;
+  /// The motion from the image `before` to `turn_image` (both as turnBySpectra uses them) by their spectra, both less
+  /// the mean of the recent images: believed with a clear phase correlation peak and a shift of the ground.
+  std::optional<Bridge> motionBySpectra(const cv::Mat& before, const cv::Mat& turn_image, double turn_scale) const;
   /// The current segment joins the map (a relocalization): its frames count as measured, the graph is optimised.
   void joinMap(FrameResult& result);
   /// Lost segments that never joined the map are localized on it (after a segment joined it and was optimised in
@@ -282,6 +292,8 @@ class Slam {
   bool vouchedFor(const OdometryEdge& odometry, const Keyframe& current) const;
   /// Every match the fit used stays where it was in the image (within movedDistanceM on the ground).
   bool atRest(const Pose2& fitted, const std::vector<Match>& used, const Keyframe& current) const;
+  /// Every keypoint of the frame stays where it was in the image under the motion (within movedDistanceM on the ground).
+  bool keypointsStayPut(const Pose2& T_prev_curr, const Keyframe& current) const;
   /// How far a fit must move a still match on the ground for the robot to have moved (outdoor.moved_factor still
   /// radii): less, and the match may be ground at rest as well as the robot's own artifact.
   double movedDistanceM() const { return config_.outdoor.moved_factor * config_.outdoor.still_radius_px * ground_sample_m_; }

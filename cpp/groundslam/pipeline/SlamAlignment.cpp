@@ -138,8 +138,49 @@ std::optional<OdometryEdge> Slam::odometryByAlignment(const Keyframe& previous, 
   const auto aligned = alignFromSteps(previous_alignment_, alignment, 1, true);
   if (!aligned) return std::nullopt;
   const Pose2 T_prev_curr = groundMotionOf(aligned->W_previous_current);
-  if (!plausibleMotion(T_prev_curr, previous.timestamp, current.timestamp)) return std::nullopt;
+  if (!plausibleMotion(T_prev_curr, previous.timestamp, current.timestamp) || !movedTheRobot(T_prev_curr)) return std::nullopt;
   return alignedEdge(T_prev_curr);
+}
+
+std::optional<OdometryEdge> Slam::restRefuted(const Keyframe& previous, const Keyframe& current, const OdometryEdge& odometry,
+                                              const PreparedFrame& prepared) const {
+  // On a floor too faint for its own keypoints to match, those of the robot's shadow edge, lens dirt and bumper are
+  // the only ones that do, and every one says the robot stands still, frame after frame: nothing shows them moving
+  // against the ground. The images' spectra, less the mean of the recent images (where the moving ground blurs away
+  // and what stays in the image remains), see the ground itself.
+  // An alignment near rest is judged the same way: it too is pulled there by what stays in the image.
+  const bool at_rest = odometry.aligned ? keypointsStayPut(odometry.T_prev_curr, current)
+                                        : !odometry.used.empty() && atRest(odometry.T_prev_curr, odometry.used, current);
+  if (!config_.odometry_checks.rest_check_by_spectra || odometry.fallback || odometry.low_overlap || !at_rest) return std::nullopt;
+  const auto spectral = motionBySpectra(previous_turn_image_, prepared.turn, prepared.turn_scale);
+  if (!spectral) return std::nullopt;  // the ground did not visibly move: rest stands
+  // The motion is measured by aligning the images from where the spectra put the ground, judged as any alignment.
+  if (config_.odometry_checks.align_images && !previous_alignment_.pixels.empty() && !prepared.alignment.pixels.empty()) {
+    const ImageAlignment aligned =
+        alignImages(previous_alignment_, prepared.alignment, {imageWarpOf(spectral->T_tracked_current)}, alignment_settings_);
+    const Pose2 T_prev_curr = groundMotionOf(aligned.W_previous_current);
+    // Back at rest, the alignment found what stays in the image again.
+    if (believable(aligned) && plausibleMotion(T_prev_curr, previous.timestamp, current.timestamp) && movedTheRobot(T_prev_curr) &&
+        !keypointsStayPut(T_prev_curr, current)) {
+      OdometryEdge edge = alignedEdge(T_prev_curr);
+      edge.matches = odometry.matches;
+      return edge;
+    }
+  }
+  // Failing that, the motion is not known; the spectra's is the likeliest.
+  OdometryEdge failed = odometry;
+  failed.fit_status = FitStatus::still;
+  return fallbackOdometry(failed, std::nullopt, spectral->T_tracked_current);
+}
+
+bool Slam::movedTheRobot(const Pose2& T_prev_curr) const {
+  // What stays in the image aligns best near rest (the robot's shadow and glare, a smooth floor that looks the same
+  // after any small shift), turned or not: an alignment that leaves the robot nearly where it was is not believed,
+  // unless it turned sharply on the spot. Nearly: less than align_min_step_share of its usual step, or before any
+  // step was measured, less than the distance that tells a moved feature from a still one.
+  if (sharpTurn(T_prev_curr)) return true;
+  const double least = last_good_odometry_ ? config_.odometry_checks.align_min_step_share * usualStep().translation().norm() : movedDistanceM();
+  return T_prev_curr.translation().norm() >= least;
 }
 
 OdometryEdge Slam::alignedEdge(const Pose2& T_prev_curr) const {
@@ -148,6 +189,11 @@ OdometryEdge Slam::alignedEdge(const Pose2& T_prev_curr) const {
   edge.covariance = sigmaCovariance(config_.odometry_checks.align_sigma_m, config_.odometry_checks.align_sigma_rad);
   edge.aligned = true;
   return edge;
+}
+
+bool Slam::keypointsStayPut(const Pose2& T_prev_curr, const Keyframe& current) const {
+  return std::all_of(current.features.points.begin(), current.features.points.end(),
+                     [&](const Eigen::Vector2d& p) { return (T_prev_curr * p - p).norm() < movedDistanceM(); });
 }
 
 bool Slam::atRest(const Pose2& fitted, const std::vector<Match>& used, const Keyframe& current) const {

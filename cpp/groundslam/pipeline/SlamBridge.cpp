@@ -147,13 +147,17 @@ std::optional<Slam::Bridge> Slam::confirmedSearch(const Keyframe& current, const
 }
 
 std::optional<Slam::Bridge> Slam::bridgeBySpectra(const cv::Mat& turn_image, double turn_scale) const {
+  return motionBySpectra(tracked_turn_image_, turn_image, turn_scale);
+}
+
+std::optional<Slam::Bridge> Slam::motionBySpectra(const cv::Mat& before, const cv::Mat& turn_image, double turn_scale) const {
   const double min_peak = config_.odometry_checks.bridge_spectral_min_peak;
-  if (!(min_peak > 0.0) || turn_image.empty() || tracked_turn_image_.size() != turn_image.size() ||
-      turn_background_.size() != turn_image.size() || !comparableContrast(tracked_turn_image_, turn_image)) {
+  if (!(min_peak > 0.0) || turn_image.empty() || before.size() != turn_image.size() ||
+      turn_background_.size() != turn_image.size() || !comparableContrast(before, turn_image)) {
     return std::nullopt;
   }
   // What stays in the image (the robot's shadow, bumper, lens dirt, vignetting) is the mean of the recent images.
-  const cv::Mat tracked = tracked_turn_image_ - turn_background_, current = turn_image - turn_background_;
+  const cv::Mat tracked = before - turn_background_, current = turn_image - turn_background_;
   const SpectralTurn turn = spectralTurn(tracked, current);
   if (!(turn.peak_ratio > 0.0)) return std::nullopt;
   // The spectra tell the turn up to half a turn: the right one, undone, leaves the images matching by a shift. That
