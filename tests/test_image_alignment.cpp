@@ -654,7 +654,7 @@ TEST(ImageAlignment, OutdoorsOnAFaintFloorMatchesThatAllStayInPlaceAreRefutedByT
   // see the ground shift: such a fit or alignment is refused (`fallback_still`) and the spectra's motion assumed,
   // unless the images aligned from it measure the motion. Measured (seeds 3 and 4), without / with the check:
   // measured frames at rest 43 + 36 / 1 + 1 (the first frame, before there is a mean of recent images); aligned frames
-  // at rest 12 + 13 / 0; still frames 0 / 49 + 44, of them within 3 mm of the truth 47 + 41.
+  // at rest 12 + 13 / 0; still frames 0 / 58 + 46, of them within 3 mm of the truth 52 + 40.
   FaintFloorRun without, with;
   for (const std::uint64_t seed : {3u, 4u}) {
     const FaintFloorRun a = runFaintFloor(false, seed), b = runFaintFloor(true, seed);
@@ -668,7 +668,7 @@ TEST(ImageAlignment, OutdoorsOnAFaintFloorMatchesThatAllStayInPlaceAreRefutedByT
   EXPECT_LE(with.measured_at_rest, 2);
   EXPECT_EQ(with.aligned_at_rest, 0);
   EXPECT_EQ(with.ok_off, 0);
-  EXPECT_GE(with.still, 60);
+  EXPECT_GE(with.still, 80);
   EXPECT_GE(with.still_near_truth, with.still * 85 / 100);
 }
 
@@ -676,9 +676,9 @@ TEST(ImageAlignment, OnAFaintFloorAnAlignmentThatLeavesTheRobotBehindItsUsualSte
   // A faint floor a little less faint (5 grey levels), with the robot's artifacts: where the keypoints fail, the images
   // are aligned, and what stays in them pulls the alignment toward rest, turned or not. An alignment that moves the
   // robot less than half its usual step is not believed (odometry.align_min_step_share). Measured (loops of 100
-  // frames, seeds 3 and 5), without / with: aligned frames 44 + 11 / 1 + 0, off by 5 mm or 0.5 degrees 44 + 11 / 0.
+  // frames, seeds 3 and 6), without / with: aligned frames 29 + 18 / 1 + 0, off by 5 mm or 0.5 degrees 28 + 18 / 0.
   int aligned_off_without = 0, aligned_off_with = 0, aligned_with = 0;
-  for (const std::uint64_t seed : {3u, 5u}) {
+  for (const std::uint64_t seed : {3u, 6u}) {
     aligned_off_without += runFaintFloor(true, seed, 5.0, 0.0, sim::PathKind::loop, 100).aligned_off;
     const FaintFloorRun with = runFaintFloor(true, seed, 5.0, 0.5, sim::PathKind::loop, 100);
     aligned_off_with += with.aligned_off;

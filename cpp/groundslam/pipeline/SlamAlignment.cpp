@@ -154,14 +154,17 @@ std::optional<OdometryEdge> Slam::restRefuted(const Keyframe& previous, const Ke
   if (!config_.odometry_checks.rest_check_by_spectra || odometry.fallback || odometry.low_overlap || !at_rest) return std::nullopt;
   const auto spectral = motionBySpectra(previous_turn_image_, prepared.turn, prepared.turn_scale);
   if (!spectral) return std::nullopt;  // the ground did not visibly move: rest stands
-  // The motion is measured by aligning the images from where the spectra put the ground, judged as any alignment.
+  // The motion is measured by aligning the images from where the spectra put the ground, judged as any alignment,
+  // and kept only where it stays with the spectra's (within the doubt an aligned motion carries, align_sigma_m, and
+  // the spectra's 1 degree): drawn back toward rest, it found what stays in the image again.
   if (config_.odometry_checks.align_images && !previous_alignment_.pixels.empty() && !prepared.alignment.pixels.empty()) {
-    const ImageAlignment aligned =
-        alignImages(previous_alignment_, prepared.alignment, {imageWarpOf(spectral->T_tracked_current)}, alignment_settings_);
+    const Pose2& by_spectra = spectral->T_tracked_current;
+    const ImageAlignment aligned = alignImages(previous_alignment_, prepared.alignment, {imageWarpOf(by_spectra)}, alignment_settings_);
     const Pose2 T_prev_curr = groundMotionOf(aligned.W_previous_current);
-    // Back at rest, the alignment found what stays in the image again.
-    if (believable(aligned) && plausibleMotion(T_prev_curr, previous.timestamp, current.timestamp) && movedTheRobot(T_prev_curr) &&
-        !keypointsStayPut(T_prev_curr, current)) {
+    const Pose2 apart = by_spectra.inverse() * T_prev_curr;
+    const bool with_the_spectra = apart.translation().norm() <= config_.odometry_checks.align_sigma_m && std::abs(apart.theta) <= M_PI / 180.0;
+    if (believable(aligned) && with_the_spectra && plausibleMotion(T_prev_curr, previous.timestamp, current.timestamp) &&
+        movedTheRobot(T_prev_curr)) {
       OdometryEdge edge = alignedEdge(T_prev_curr);
       edge.matches = odometry.matches;
       return edge;
