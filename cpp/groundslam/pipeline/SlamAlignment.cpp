@@ -149,9 +149,10 @@ std::optional<OdometryEdge> Slam::restRefuted(const Keyframe& previous, const Ke
   // against the ground. The images' spectra, less the mean of the recent images (where the moving ground blurs away
   // and what stays in the image remains), see the ground itself.
   // An alignment near rest is judged the same way: it too is pulled there by what stays in the image.
+  if (!config_.odometry_checks.rest_check_by_spectra || odometry.fallback || odometry.low_overlap) return std::nullopt;
   const bool at_rest = odometry.aligned ? keypointsStayPut(odometry.T_prev_curr, current)
                                         : !odometry.used.empty() && atRest(odometry.T_prev_curr, odometry.used, current);
-  if (!config_.odometry_checks.rest_check_by_spectra || odometry.fallback || odometry.low_overlap || !at_rest) return std::nullopt;
+  if (!at_rest) return std::nullopt;
   const auto spectral = motionBySpectra(previous_turn_image_, prepared.turn, prepared.turn_scale);
   if (!spectral) return std::nullopt;  // the ground did not visibly move: rest stands
   // The motion is measured by aligning the images from where the spectra put the ground, judged as any alignment,
@@ -173,6 +174,7 @@ std::optional<OdometryEdge> Slam::restRefuted(const Keyframe& previous, const Ke
   // Failing that, the motion is not known; the spectra's is the likeliest.
   OdometryEdge failed = odometry;
   failed.fit_status = FitStatus::still;
+  failed.aligned = false;
   return fallbackOdometry(failed, std::nullopt, spectral->T_tracked_current);
 }
 
