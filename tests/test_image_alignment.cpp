@@ -24,7 +24,8 @@ namespace {
 constexpr double kDeg = M_PI / 180.0;
 
 /// A smooth floor: seeded noise blurred to blobs `blur_px` wide, stretched to 0..255 (few corners for ORB).
-cv::Mat smoothTexture(int size, double blur_px, std::uint64_t seed) {
+/// Seeded white noise, standard deviation 1 (CV_32F, size x size), blurred `blur_px`.
+cv::Mat blurredNoise(int size, double blur_px, std::uint64_t seed) {
   cv::Mat noise(size, size, CV_32F);
   std::mt19937_64 rng(seed);
   std::normal_distribution<float> gauss(0.0f, 1.0f);
@@ -32,6 +33,11 @@ cv::Mat smoothTexture(int size, double blur_px, std::uint64_t seed) {
     for (int c = 0; c < size; ++c) noise.at<float>(r, c) = gauss(rng);
   }
   cv::GaussianBlur(noise, noise, cv::Size(0, 0), blur_px);
+  return noise;
+}
+
+cv::Mat smoothTexture(int size, double blur_px, std::uint64_t seed) {
+  cv::Mat noise = blurredNoise(size, blur_px, seed);
   cv::Mat texture;
   cv::normalize(noise, noise, 0.0, 255.0, cv::NORM_MINMAX);
   noise.convertTo(texture, CV_8U);
@@ -290,6 +296,14 @@ sim::SimulationSettings floorRun(sim::PathKind kind, int frames, std::uint64_t s
   return s;
 }
 
+/// A configuration for `s`'s camera, loop closure off: odometry alone.
+Config odometryOnlyConfig(const sim::SimulationSettings& s) {
+  Config config;
+  config.camera = cameraConfigOf(s.camera, s.mounting_height_m);
+  config.loop_closure.enabled = false;
+  return config;
+}
+
 /// How far frame i's odometry motion is from the true one: metres, radians.
 std::pair<double, double> odometryError(const FrameResult& r, const sim::SequenceSimulator& simulator, int i) {
   const Pose2 expected = between(simulator.groundTruth()[size_t(i - 1)], simulator.groundTruth()[size_t(i)]);
@@ -308,8 +322,7 @@ struct SmoothFloorRun {
 SmoothFloorRun runSmoothFloor(bool align_images, bool loop_closure = false, int blank = -1) {
   sim::SimulationSettings s = floorRun(sim::PathKind::loop, 60, 5);
   const sim::SequenceSimulator simulator(s, smoothTexture(512, 12.0, 11));
-  Config config;
-  config.camera = cameraConfigOf(s.camera, s.mounting_height_m);
+  Config config = odometryOnlyConfig(s);
   config.loop_closure.enabled = loop_closure;
   config.odometry_checks.align_images = align_images;
   Slam slam(config, loop_closure ? std::make_shared<const Vocabulary>(readVocabulary(std::string(GROUNDSLAM_SOURCE_DIR) +
@@ -353,9 +366,7 @@ WeakFitRun runBrickFloor(int check_below, sim::PathKind path, std::uint64_t seed
   sim::SimulationSettings s = floorRun(path, 120, seed);
   if (outdoors) s.artifacts = {0.6, 6, 0.8, 0.15};
   const sim::SequenceSimulator simulator(s, brickTexture(512, 24, seed));
-  Config config;
-  config.camera = cameraConfigOf(s.camera, s.mounting_height_m);
-  config.loop_closure.enabled = false;
+  Config config = odometryOnlyConfig(s);
   config.odometry_checks.align_check_below_inliers = check_below;
   config.odometry_checks.ok_sigmas = ok_sigmas;
   Slam slam(config, nullptr);
@@ -499,9 +510,7 @@ std::vector<FrameResult> faintFloorRun(double blur_px) {
   cv::Mat floor;
   smoothTexture(512, blur_px, 5).convertTo(floor, CV_8U, 0.1, 128.0 * 0.9);
   const sim::SequenceSimulator simulator(s, floor);
-  Config config;
-  config.camera = cameraConfigOf(s.camera, s.mounting_height_m);
-  config.loop_closure.enabled = false;
+  Config config = odometryOnlyConfig(s);
   Slam slam(config, nullptr);
   std::vector<FrameResult> results;
   for (int i = 0; i < simulator.frameCount(); ++i) results.push_back(slam.process(simulator.renderFrame(i), i));
@@ -565,9 +574,7 @@ TEST(ImageAlignment, ARobotStandingStillIsOkOnceItWasSeenMoving) {
   s.path.frames = 12;
   s.photometry.noise_sigma = 2.0;
   const sim::SequenceSimulator simulator(s);
-  Config config;
-  config.camera = cameraConfigOf(s.camera, s.mounting_height_m);
-  config.loop_closure.enabled = false;
+  Config config = odometryOnlyConfig(s);
   Slam slam(config, nullptr);
   double t = 0.0;
   slam.process(simulator.renderFrame(0), t);
@@ -589,13 +596,7 @@ namespace {
 /// A faint floor: fine grain (seeded noise blurred 0.7 texels) of `contrast` grey levels around 90 (a smooth concrete
 /// seen through a dim light).
 cv::Mat faintTexture(int size, double contrast, std::uint64_t seed) {
-  cv::Mat noise(size, size, CV_32F);
-  std::mt19937_64 rng(seed);
-  std::normal_distribution<float> gauss(0.0f, 1.0f);
-  for (int r = 0; r < size; ++r) {
-    for (int c = 0; c < size; ++c) noise.at<float>(r, c) = gauss(rng);
-  }
-  cv::GaussianBlur(noise, noise, cv::Size(0, 0), 0.7);
+  const cv::Mat noise = blurredNoise(size, 0.7, seed);
   cv::Scalar mean, deviation;
   cv::meanStdDev(noise, mean, deviation);
   cv::Mat texture;
@@ -615,9 +616,7 @@ FaintFloorRun runFaintFloor(bool check_rest, std::uint64_t seed, double contrast
   groundslam::testing::putUnderTheOutdoorLook(s);
   s.wet_after = 1.0;
   const sim::SequenceSimulator simulator(s, faintTexture(512, contrast, seed));
-  Config config;
-  config.camera = cameraConfigOf(s.camera, s.mounting_height_m);
-  config.loop_closure.enabled = false;
+  Config config = odometryOnlyConfig(s);
   config.odometry_checks.rest_check_by_spectra = check_rest;
   config.odometry_checks.align_min_step_share = min_step_share;
   Slam slam(config, nullptr);
