@@ -2,6 +2,7 @@
 // whatever the translation, up to half a turn; nothing claimed between unrelated images.
 #include <cmath>
 #include <cstdint>
+#include <utility>
 
 #include <gtest/gtest.h>
 #include <opencv2/imgproc.hpp>
@@ -123,4 +124,21 @@ TEST(SpectralTurn, WithTheTurnKnownThePhaseCorrelationGivesTheShift) {
     }
   }
   EXPECT_EQ(shiftAfterTurn(cv::Mat(), cv::Mat(), 0.0).response, 0.0);
+}
+
+TEST(SpectralTurn, AShiftPastHalfTheImageIsNotTakenForItsAliasTheOtherWay) {
+  // Frames dropped: the views overlap by 35-45% of the central square, whose phase correlation knows a shift only
+  // modulo its side (a 150-pixel shift down reads as 90 up). The overlap's correlation tells the two apart.
+  const cv::Mat floor = grainyFloor(900, 1.5, 17);
+  const cv::Mat previous = view(floor, {0, 0}, 0.0);
+  for (const auto& [offset, turn_deg] : {std::pair{cv::Point2f(0.0f, 150.0f), 0.0}, std::pair{cv::Point2f(-135.0f, 20.0f), 0.0},
+                                        std::pair{cv::Point2f(25.0f, -140.0f), 30.0}}) {
+    const cv::Mat current = view(floor, offset, turn_deg);
+    const TurnAndShift found = shiftAfterTurn(previous, current, turn_deg * kDeg);
+    for (const cv::Point2d p : {cv::Point2d(160, 120), cv::Point2d(0, 0), cv::Point2d(319, 239)}) {
+      const cv::Vec2d mapped = found.W_previous_current * cv::Vec3d(p.x, p.y, 1.0);
+      const cv::Point2d expected = seenBefore(floor, offset, turn_deg, p);
+      EXPECT_LT(std::hypot(mapped[0] - expected.x, mapped[1] - expected.y), 1.5) << offset << " at " << p;
+    }
+  }
 }

@@ -234,6 +234,10 @@ bool isDegenerate(const std::vector<Eigen::Vector2d>& points, const std::vector<
 
 }  // namespace
 
+bool tooLittleEvidence(FitStatus status) {
+  return status == FitStatus::too_few_matches || status == FitStatus::too_few_inliers || status == FitStatus::degenerate;
+}
+
 const char* fitStatusName(FitStatus status) {
   switch (status) {
     case FitStatus::ok: return "ok";
@@ -268,7 +272,7 @@ RigidEstimate fitRigidTransform(const std::vector<Eigen::Vector2d>& target, cons
     estimate.status = FitStatus::too_few_inliers;
     return estimate;
   }
-  if (isDegenerate(source, inliers, 2.0 * settings.ransac_inlier_m)) {
+  if (isDegenerate(source, inliers, settings.min_spread_inliers * settings.ransac_inlier_m)) {
     estimate.status = FitStatus::degenerate;
     return estimate;
   }
@@ -290,7 +294,7 @@ RigidEstimate refineRigidTransform(const std::vector<Eigen::Vector2d>& target, c
     estimate.inliers = static_cast<int>(refine_set.size());
     return estimate;
   }
-  if (isDegenerate(source, refine_set, 2.0 * settings.ransac_inlier_m)) {
+  if (isDegenerate(source, refine_set, settings.min_spread_inliers * settings.ransac_inlier_m)) {
     estimate.status = FitStatus::degenerate;
     return estimate;
   }

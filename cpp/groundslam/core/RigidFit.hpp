@@ -22,6 +22,9 @@ struct FitSettings {
   double loss_scale_m = 0.0005;  ///< residual at which the robust loss starts to down-weight, metres
   int min_inliers = 12;          ///< fewer inliers than this is a failed fit
   double ransac_inlier_m = 0.002;  ///< RANSAC inlier distance, metres
+  /// A consensus whose points spread less than this many RANSAC inlier distances (one standard deviation) across
+  /// their narrowest direction is degenerate: matches along one edge slide along it.
+  double min_spread_inliers = 2.0;
   int ransac_iterations = 200;   ///< most RANSAC hypotheses (fewer when the inlier ratio allows)
   int seed = 42;                 ///< seed of the RANSAC sampler
   bool measure_ambiguity = false;  ///< run every RANSAC hypothesis and report the best rival transform's support
@@ -47,6 +50,8 @@ struct TransformPrior {
 /// `still`: set by callers that refuse a fit leaving every match in place while the images show the ground moving.
 enum class FitStatus { ok, too_few_matches, too_few_inliers, degenerate, solver_failed, ambiguous, implausible_motion, still };
 const char* fitStatusName(FitStatus status);
+/// The fit had too little evidence (too few matches or inliers, degenerate), not a motion refused for what it said.
+bool tooLittleEvidence(FitStatus status);
 
 struct RigidEstimate {
   FitStatus status = FitStatus::too_few_matches;

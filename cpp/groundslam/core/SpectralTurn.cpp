@@ -1,7 +1,10 @@
 #include "groundslam/core/SpectralTurn.hpp"
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
+#include <optional>
 
 #include <opencv2/imgproc.hpp>
 
@@ -85,6 +88,43 @@ double phasePeakAfterTurn(const cv::Mat& previous, const cv::Mat& current, doubl
   return shiftAfterTurn(previous, current, turn_rad).response;
 }
 
+namespace {
+
+/// Pearson correlation of `a` and `b` where `b` shows at p what `a` shows at p - shift (whole pixels); none when they
+/// overlap by less than kMinOverlap of the square in either direction.
+std::optional<double> overlapCorrelation(const cv::Mat& a, const cv::Mat& b, cv::Point shift) {
+  constexpr double kMinOverlap = 0.15;
+  const int width = a.cols - std::abs(shift.x), height = a.rows - std::abs(shift.y);
+  if (width < kMinOverlap * a.cols || height < kMinOverlap * a.rows) return std::nullopt;
+  const cv::Rect in_b(std::max(0, shift.x), std::max(0, shift.y), width, height);
+  const cv::Rect in_a(in_b.x - shift.x, in_b.y - shift.y, width, height);
+  const cv::Mat x = a(in_a) - cv::mean(a(in_a))[0], y = b(in_b) - cv::mean(b(in_b))[0];
+  const double norms = std::sqrt(x.dot(x) * y.dot(y));
+  return norms > 0.0 ? x.dot(y) / norms : 0.0;
+}
+
+/// The phase correlation finds a shift only modulo the square's side: a shift past half of it (images overlapping by
+/// less than half, frames dropped) is reported as its alias the other way. Of the shift and its aliases, the one whose
+/// overlap correlates best.
+cv::Point2d unaliasedShift(const cv::Mat& a, const cv::Mat& b, cv::Point2d shift) {
+  const auto aliases = [](double s, int side) { return std::array<double, 2>{s, s > 0.0 ? s - side : s + side}; };
+  cv::Point2d best = shift;
+  double best_correlation = -std::numeric_limits<double>::infinity();
+  for (const double x : aliases(shift.x, a.cols)) {
+    for (const double y : aliases(shift.y, a.rows)) {
+      const cv::Point whole(static_cast<int>(std::lround(x)), static_cast<int>(std::lround(y)));
+      const std::optional<double> correlation = overlapCorrelation(a, b, whole);
+      if (correlation && *correlation > best_correlation) {
+        best_correlation = *correlation;
+        best = {x, y};
+      }
+    }
+  }
+  return best;
+}
+
+}  // namespace
+
 TurnAndShift shiftAfterTurn(const cv::Mat& previous, const cv::Mat& current, double turn_rad) {
   TurnAndShift result;
   if (previous.empty() || previous.size() != current.size() || previous.channels() != 1 || current.channels() != 1 ||
@@ -106,7 +146,7 @@ TurnAndShift shiftAfterTurn(const cv::Mat& previous, const cv::Mat& current, dou
   cv::Mat window;
   cv::createHanningWindow(window, a.size(), CV_64F);
   double response = 0.0;
-  const cv::Point2d shift = cv::phaseCorrelate(a, turned_back, window, &response);
+  const cv::Point2d shift = unaliasedShift(a, turned_back, cv::phaseCorrelate(a, turned_back, window, &response));
   if (!std::isfinite(response)) return result;
   // The turned-back image shows at p what the previous one shows at p - shift (both squares cut at one place).
   cv::Matx23d W;

@@ -129,6 +129,13 @@ struct OdometryChecks {
   /// while it drives. The images are then aligned from the spectra's motion (`aligned`), else the frame's motion is
   /// not known (`fallback_still`, or `lost_still` with loop closure). false: rest is never checked.
   bool rest_check_by_spectra = true;
+  /// A fit refused for too little evidence (too few matches or inliers, degenerate) on a floor that does not repeat is
+  /// measured again from the images' spectra, less the mean of the recent images: the features are matched only near
+  /// where the spectra's motion puts them (bridge_search_radius_m), and the fit is kept (`low_overlap`) when it has no
+  /// rival and stays within align_sigma_m and 1 degree of the spectra's motion; else the images are aligned from that
+  /// motion (`aligned`), kept as closely. Frames dropped without a trace leave the images overlapping by less than
+  /// half: too few features match among all of them. false: such a fit is a loss.
+  bool gap_by_spectra = true;
   /// A fit with fewer inliers than this is checked by aligning the images from its motion: an alignment believed
   /// as above that ends more than align_check_m or align_check_rad away replaces it (the frame says `aligned`)
   /// when the fit's matches support it nearly as well: at least align_check_support times as many of them lie
@@ -407,6 +414,7 @@ void visitConfigFields(Config_& c, Visitor&& v) {
   v("odometry", "align_sigma_rad", c.odometry_checks.align_sigma_rad, kNonNegative);
   v("odometry", "align_min_step_share", c.odometry_checks.align_min_step_share, kNonNegative);
   v("odometry", "rest_check_by_spectra", c.odometry_checks.rest_check_by_spectra, Range{});
+  v("odometry", "gap_by_spectra", c.odometry_checks.gap_by_spectra, Range{});
   v("odometry", "align_check_below_inliers", c.odometry_checks.align_check_below_inliers, Range{0, 1000000});
   v("odometry", "align_check_m", c.odometry_checks.align_check_m, kNonNegative);
   v("odometry", "align_check_rad", c.odometry_checks.align_check_rad, kNonNegative);

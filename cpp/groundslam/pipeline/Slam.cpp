@@ -29,11 +29,6 @@ GraphEdge informationFreeEdge(int from, int to, const Pose2& T_from_to) {
   return {from, to, T_from_to, Eigen::Vector3d(1e-4, 1e-4, 1e-4).asDiagonal(), false};
 }
 
-/// The fit had too little evidence (not a motion refused for its rivals or its speed).
-bool tooLittleEvidence(FitStatus status) {
-  return status == FitStatus::too_few_matches || status == FitStatus::too_few_inliers || status == FitStatus::degenerate;
-}
-
 }  // namespace
 
 Slam::Slam(const Config& config, std::shared_ptr<const Vocabulary> vocabulary)
@@ -90,6 +85,11 @@ FrameResult Slam::process(PreparedFrame prepared) {
     if (odometry.fallback && !odometry.turn_measured) turnBySpectra(odometry, prepared.turn);
     // Not in the paper: every match in place while the images show the ground moving is the robot's own artifacts.
     if (auto moving = restRefuted(*previous_, current, odometry, prepared)) odometry = std::move(*moving);
+    // Not in the paper: too few matches among all features after frames dropped; the spectra show where to look.
+    if (auto measured = gapBySpectra(*previous_, current, odometry, prepared)) {
+      odometry = std::move(*measured);
+      result.inliers = odometry.inliers;
+    }
     // Only where something already stayed still (a still match, an artifact cell): a clean floor pays nothing.
     const bool artifacts_seen = result.still_matches > 0 || artifact_mask_.artifactCells() > 0;
     if (!odometry.fallback && artifacts_seen) still = stillFeatures(*previous_, current, odometry.T_prev_curr);
@@ -478,9 +478,9 @@ void Slam::optimiseIfDue(FrameResult& result, bool at_end) {
 }
 
 RigidEstimate Slam::fitMatches(const std::vector<Match>& matches, const Keyframe& previous, const Keyframe& current,
-                              const FitSettings& settings) const {
+                              const FitSettings& settings, const std::optional<TransformPrior>& prior) const {
   const auto [previous_points, current_points] = matchedPoints(matches, current.features, previous.features);
-  return fitRigidTransform(previous_points, current_points, settings);
+  return fitRigidTransform(previous_points, current_points, settings, prior);
 }
 
 RigidEstimate Slam::refineMatches(const std::vector<Match>& matches, const Keyframe& previous, const Keyframe& current,

@@ -123,6 +123,17 @@ class Slam {
   /// (FitStatus::still) assuming the spectra's motion. None when rest stands.
   std::optional<OdometryEdge> restRefuted(const Keyframe& previous, const Keyframe& current, const OdometryEdge& odometry,
                                           const PreparedFrame& prepared) const;
+  /// A fit refused for too little evidence, measured again near the motion the images' spectra show
+  /// (odometry.gap_by_spectra): by the features matched there (`low_overlap`), else by the images aligned from there
+  /// (`aligned`). None when the spectra show nothing or neither stays with them, or on a floor that repeats.
+  std::optional<OdometryEdge> gapBySpectra(const Keyframe& previous, const Keyframe& current, const OdometryEdge& odometry,
+                                           const PreparedFrame& prepared) const;
+  /// The images aligned from the spectra's motion, kept when believable, within align_sigma_m and 1 degree of it,
+  /// plausible and moving the robot (`aligned`); none otherwise.
+  std::optional<OdometryEdge> alignedFromSpectra(const Keyframe& previous, const Keyframe& current, const Pose2& by_spectra,
+                                                 const PreparedFrame& prepared) const;
+  /// Whether a measured motion stays within align_sigma_m and 1 degree of the spectra's.
+  bool withTheSpectra(const Pose2& by_spectra, const Pose2& T_prev_curr) const;
   /// What the images say of a fit: not checked (enough inliers), it agrees, the aligned motion replaces it, or nothing.
   struct FitCheck {
     enum class Outcome { not_checked, confirmed, replaced, unconfirmed } outcome = Outcome::not_checked;
@@ -184,7 +195,8 @@ class Slam {
   std::optional<Bridge> bridgeBySpectra(const cv::Mat& turn_image, double turn_scale) const;
   /// The motion from the image `before` to `turn_image` (both as turnBySpectra uses them) by their spectra, both less
   /// the mean of the recent images: believed with a clear phase correlation peak and a shift of the ground.
-  std::optional<Bridge> motionBySpectra(const cv::Mat& before, const cv::Mat& turn_image, double turn_scale) const;
+  std::optional<Bridge> motionBySpectra(const cv::Mat& before, const cv::Mat& turn_image, double turn_scale,
+                                        double min_peak) const;
   /// The current segment joins the map (a relocalization): its frames count as measured, the graph is optimised.
   void joinMap(FrameResult& result);
   /// Lost segments that never joined the map are localized on it (after a segment joined it and was optimised in
@@ -204,7 +216,7 @@ class Slam {
   RigidEstimate refineMatches(const std::vector<Match>& matches, const Keyframe& previous, const Keyframe& current,
                               const Pose2& initial) const;
   RigidEstimate fitMatches(const std::vector<Match>& matches, const Keyframe& previous, const Keyframe& current,
-                           const FitSettings& settings) const;
+                           const FitSettings& settings, const std::optional<TransformPrior>& prior = std::nullopt) const;
   /// Matches split into still ones and the rest; when the rest fit a motion that moves the still ones, that fit.
   std::optional<RigidEstimate> fitWithoutStill(const StillSplit& split, const Keyframe& previous, const Keyframe& current) const;
   /// What the robot's steps make of a refused fit: the candidate they clearly point to, believed; failing that,
