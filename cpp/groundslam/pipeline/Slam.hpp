@@ -195,8 +195,7 @@ class Slam {
   std::optional<Bridge> bridgeBySpectra(const cv::Mat& turn_image, double turn_scale) const;
   /// The motion from the image `before` to `turn_image` (both as turnBySpectra uses them) by their spectra, both less
   /// the mean of the recent images: believed with a clear phase correlation peak and a shift of the ground.
-  std::optional<Bridge> motionBySpectra(const cv::Mat& before, const cv::Mat& turn_image, double turn_scale,
-                                        double min_peak) const;
+  std::optional<Bridge> motionBySpectra(const cv::Mat& before, const cv::Mat& turn_image, double turn_scale) const;
   /// The current segment joins the map (a relocalization): its frames count as measured, the graph is optimised.
   void joinMap(FrameResult& result);
   /// Lost segments that never joined the map are localized on it (after a segment joined it and was optimised in

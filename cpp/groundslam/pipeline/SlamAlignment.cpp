@@ -153,7 +153,7 @@ std::optional<OdometryEdge> Slam::restRefuted(const Keyframe& previous, const Ke
   const bool at_rest = odometry.aligned ? keypointsStayPut(odometry.T_prev_curr, current)
                                         : !odometry.used.empty() && atRest(odometry.T_prev_curr, odometry.used, current);
   if (!at_rest) return std::nullopt;
-  const auto spectral = motionBySpectra(previous_turn_image_, prepared.turn, prepared.turn_scale, config_.odometry_checks.bridge_spectral_min_peak);
+  const auto spectral = motionBySpectra(previous_turn_image_, prepared.turn, prepared.turn_scale);
   if (!spectral) return std::nullopt;  // the ground did not visibly move: rest stands
   // The motion is measured by aligning the images from where the spectra put the ground: drawn back toward rest, it
   // found what stays in the image again.
@@ -177,7 +177,7 @@ std::optional<OdometryEdge> Slam::gapBySpectra(const Keyframe& previous, const K
   if (!checks.gap_by_spectra || !odometry.fallback || !tooLittleEvidence(odometry.fit_status) || repeatedFloor(current.index)) {
     return std::nullopt;
   }
-  const auto spectral = motionBySpectra(previous_turn_image_, prepared.turn, prepared.turn_scale, checks.bridge_spectral_min_peak);
+  const auto spectral = motionBySpectra(previous_turn_image_, prepared.turn, prepared.turn_scale);
   if (!spectral) return std::nullopt;
   const Pose2& by_spectra = spectral->T_tracked_current;
   // The features compared only near where the spectra's motion puts them: a partner's rivals elsewhere are out of reach.

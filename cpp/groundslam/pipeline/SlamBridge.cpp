@@ -147,11 +147,11 @@ std::optional<Slam::Bridge> Slam::confirmedSearch(const Keyframe& current, const
 }
 
 std::optional<Slam::Bridge> Slam::bridgeBySpectra(const cv::Mat& turn_image, double turn_scale) const {
-  return motionBySpectra(tracked_turn_image_, turn_image, turn_scale, config_.odometry_checks.bridge_spectral_min_peak);
+  return motionBySpectra(tracked_turn_image_, turn_image, turn_scale);
 }
 
-std::optional<Slam::Bridge> Slam::motionBySpectra(const cv::Mat& before, const cv::Mat& turn_image, double turn_scale,
-                                                  double min_peak) const {
+std::optional<Slam::Bridge> Slam::motionBySpectra(const cv::Mat& before, const cv::Mat& turn_image, double turn_scale) const {
+  const double min_peak = config_.odometry_checks.bridge_spectral_min_peak;
   if (!(min_peak > 0.0) || turn_image.empty() || before.size() != turn_image.size() ||
       turn_background_.size() != turn_image.size() || !comparableContrast(before, turn_image)) {
     return std::nullopt;
