@@ -731,7 +731,7 @@ DroppedFramesRun runHeldOutCarpetLawnmower(bool gap_by_spectra, int watched, int
 }  // namespace
 
 TEST(ImageAlignment, OverFramesDroppedWithoutATraceThePairTooFewFeaturesMatchIsMeasuredNearTheSpectrasMotion) {
-  // Seven frames' motion at once (seven dropped): the images overlap by less than half, along the image's short side,
+  // Seven frames' motion at once (six dropped): the images overlap by less than half, along the image's short side,
   // the rest under the robot's shadow, glare and bumper. Among all features the ratio test leaves 17 matches, 12
   // agreeing: tracking was lost there, and on this floor (a lane already mapped beside it, seen turned half a turn)
   // not found again for 158 frames. The images' spectra register the ground 7 cm on (no longer read as their alias

@@ -103,11 +103,14 @@ std::optional<double> overlapCorrelation(const cv::Mat& a, const cv::Mat& b, cv:
   return norms > 0.0 ? x.dot(y) / norms : 0.0;
 }
 
-/// The phase correlation finds a shift only modulo the square's side: a shift past half of it (images overlapping by
-/// less than half, frames dropped) is reported as its alias the other way. Of the shift and its aliases, the one whose
-/// overlap correlates best.
+/// The phase correlation finds a shift only modulo the size it transforms (the square's side, padded to a size the DFT
+/// handles fast): a shift past half of it (images overlapping by less than half, frames dropped) is reported as its
+/// alias the other way. Of the shift and its aliases, the one whose overlap correlates best.
 cv::Point2d unaliasedShift(const cv::Mat& a, const cv::Mat& b, cv::Point2d shift) {
-  const auto aliases = [](double s, int side) { return std::array<double, 2>{s, s > 0.0 ? s - side : s + side}; };
+  const auto aliases = [](double s, int side) {
+    const int period = cv::getOptimalDFTSize(side);
+    return std::array<double, 2>{s, s > 0.0 ? s - period : s + period};
+  };
   cv::Point2d best = shift;
   double best_correlation = -std::numeric_limits<double>::infinity();
   for (const double x : aliases(shift.x, a.cols)) {

@@ -130,8 +130,8 @@ struct OdometryChecks {
   /// not known (`fallback_still`, or `lost_still` with loop closure). false: rest is never checked.
   bool rest_check_by_spectra = true;
   /// A fit refused for too little evidence (too few matches or inliers, degenerate) on a floor that does not repeat is
-  /// measured again from the images' spectra, less the mean of the recent images, where they show a motion the robot's
-  /// usual step does not explain (1.5 steps or more, or a turn more than repetition_step_turn_deg unlike it): the
+  /// measured again from the images' spectra, less the mean of the recent images, where they show a motion spanning
+  /// frames dropped (at least 1.5 of the robot's usual steps long; a sudden turn is left to the bridges): the
   /// features are matched only near where that motion puts them (bridge_search_radius_m), and the fit is kept
   /// (`low_overlap`) when it has no rival and stays within align_sigma_m and 1 degree of it; else the images are
   /// aligned from that motion (`aligned`), kept as closely. Frames dropped without a trace leave the images

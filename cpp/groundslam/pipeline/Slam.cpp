@@ -88,7 +88,7 @@ FrameResult Slam::process(PreparedFrame prepared) {
     // Not in the paper: too few matches among all features after frames dropped; the spectra show where to look.
     if (auto measured = gapBySpectra(*previous_, current, odometry, prepared)) {
       odometry = std::move(*measured);
-      result.inliers = odometry.inliers;
+      if (odometry.low_overlap) result.inliers = odometry.inliers;  // an alignment keeps the failed fit's count
     }
     // Only where something already stayed still (a still match, an artifact cell): a clean floor pays nothing.
     const bool artifacts_seen = result.still_matches > 0 || artifact_mask_.artifactCells() > 0;

@@ -134,7 +134,7 @@ class Slam {
                                                  const PreparedFrame& prepared) const;
   /// Whether a measured motion stays within align_sigma_m and 1 degree of the spectra's.
   bool withTheSpectra(const Pose2& by_spectra, const Pose2& T_prev_curr) const;
-  /// A motion the robot's usual step does not explain: frames dropped, or a turn unlike the step's.
+  /// A motion the robot's usual step does not explain: frames dropped (at least kGapSteps usual steps long).
   bool unlikeTheRobotsStep(const Pose2& T_prev_curr) const;
   /// What the images say of a fit: not checked (enough inliers), it agrees, the aligned motion replaces it, or nothing.
   struct FitCheck {
