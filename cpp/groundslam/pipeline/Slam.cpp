@@ -590,11 +590,7 @@ OdometryEdge Slam::estimateOdometry(const Keyframe& previous, const Keyframe& cu
   if (too_little && overlap_fell) {
     if (auto second_look = fitLowOverlap(previous, current)) {
       result.inliers = second_look->first.inliers;
-      OdometryEdge edge{second_look->first.T_target_source, second_look->first.covariance, result.matches, second_look->first.inliers,
-                        FitStatus::ok, false, std::move(second_look->second), second_look->first.rms_residual_m};
-      edge.low_overlap = true;
-      edge.covariance += sigmaCovariance(config_.odometry_checks.low_overlap_sigma_m, config_.odometry_checks.low_overlap_sigma_rad);
-      return edge;
+      return lowOverlapEdge(second_look->first, std::move(second_look->second), result.matches);
     }
   }
   // Still too little evidence (a smooth floor, mortar lines): the images themselves are aligned, believed only if

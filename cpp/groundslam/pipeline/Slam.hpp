@@ -161,6 +161,9 @@ class Slam {
                                              const ImageAlignmentSettings& settings) const;
   /// An edge measured by aligning the images: T_prev_curr with odometry.align_sigma_* as its covariance.
   OdometryEdge alignedEdge(const Pose2& T_prev_curr) const;
+  /// The edge of a fit measured on a second look at a low-overlap pair (`low_overlap`): `used` its matches, `matches`
+  /// the frame's ratio-test matches; low_overlap_sigma_m and low_overlap_sigma_rad added to its covariance.
+  OdometryEdge lowOverlapEdge(const RigidEstimate& fit, std::vector<Match> used, int matches) const;
   /// An alignment that passes odometry.align_* (correlation, better than rest, probes' spread).
   bool believable(const ImageAlignment& aligned) const;
   /// Image warps where `steps` of the robot's usual steps put the ground; with `more_steps`, also where up to

@@ -195,11 +195,7 @@ std::optional<OdometryEdge> Slam::gapBySpectra(const Keyframe& previous, const K
   const RigidEstimate fit = fitMatches(matches, previous, current, near_the_spectra_fitting, near_the_spectra);
   if (fit.ok() && fit.ambiguity() <= checks.max_ambiguity && withTheSpectra(by_spectra, fit.T_target_source) &&
       movedTheRobot(fit.T_target_source)) {
-    OdometryEdge edge{fit.T_target_source, fit.covariance, odometry.matches, fit.inliers, FitStatus::ok, false, std::move(matches),
-                      fit.rms_residual_m};
-    edge.low_overlap = true;
-    edge.covariance += sigmaCovariance(checks.low_overlap_sigma_m, checks.low_overlap_sigma_rad);
-    return edge;
+    return lowOverlapEdge(fit, std::move(matches), odometry.matches);
   }
   auto aligned = alignedFromSpectra(previous, current, by_spectra, prepared);
   if (aligned) aligned->matches = odometry.matches;
@@ -244,6 +240,15 @@ bool Slam::movedTheRobot(const Pose2& T_prev_curr) const {
   if (sharpTurn(T_prev_curr)) return true;
   const double least = last_good_odometry_ ? config_.odometry_checks.align_min_step_share * usualStep().translation().norm() : movedDistanceM();
   return T_prev_curr.translation().norm() >= least;
+}
+
+OdometryEdge Slam::lowOverlapEdge(const RigidEstimate& fit, std::vector<Match> used, int matches) const {
+  // Its matches crowd into the small shared area, and over a gap a rocking mount's tilt changes: less certain than
+  // its fit says (odometry.low_overlap_sigma_m, low_overlap_sigma_rad).
+  OdometryEdge edge{fit.T_target_source, fit.covariance, matches, fit.inliers, FitStatus::ok, false, std::move(used), fit.rms_residual_m};
+  edge.low_overlap = true;
+  edge.covariance += sigmaCovariance(config_.odometry_checks.low_overlap_sigma_m, config_.odometry_checks.low_overlap_sigma_rad);
+  return edge;
 }
 
 OdometryEdge Slam::alignedEdge(const Pose2& T_prev_curr) const {
