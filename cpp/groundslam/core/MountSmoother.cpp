@@ -5,6 +5,7 @@
 #include <limits>
 #include <optional>
 
+#include <Eigen/Dense>
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseCore>
 
@@ -14,6 +15,7 @@ namespace {
 constexpr int kState = 3;  // roll, pitch, height
 constexpr double kCorrelations[] = {0.0, 0.5, 0.8, 0.9, 0.95, 0.98};
 constexpr double kMaxSteps = 1000.0;  // 0.98^1000: the frames are independent
+constexpr int kRobustIterations = 5;
 
 bool usable(const FrameMountFactor& f) {
   const auto size = static_cast<Eigen::Index>(kState * f.frames.size());
@@ -31,13 +33,15 @@ struct NormalEquations {
 };
 
 NormalEquations normalEquations(int first, int count, const std::vector<FrameMountFactor>& factors, const Eigen::Vector3d& nominal,
-                                bool choosing_priors) {
+                                bool choosing_priors, const std::vector<double>& weights = {}) {
   NormalEquations system;
   system.first = first;
   system.count = count;
   system.eta = Eigen::VectorXd::Zero(kState * static_cast<Eigen::Index>(count));
-  for (const FrameMountFactor& f : factors) {
-    if (!usable(f) || (choosing_priors && !f.chooses_priors)) continue;
+  for (size_t k = 0; k < factors.size(); ++k) {
+    const FrameMountFactor& f = factors[k];
+    const double w = k < weights.size() ? weights[k] : 1.0;
+    if (!usable(f) || (choosing_priors && !f.chooses_priors) || !(w > 0.0)) continue;
     bool inside = true;
     for (int frame : f.frames) inside = inside && frame >= first && frame < first + count;
     if (!inside) continue;
@@ -47,13 +51,13 @@ NormalEquations normalEquations(int first, int count, const std::vector<FrameMou
     // 1/2 e^T H e + g^T e with e = d - d0 (d0: the linearisation's departure) = 1/2 d^T H d - (H d0 - g)^T d + const.
     Eigen::VectorXd d0 = f.factor.linearisation;
     for (Eigen::Index a = 0; a < size; ++a) d0[a] -= nominal[a % kState];
-    const Eigen::VectorXd b = H * d0 - g;
+    const Eigen::VectorXd b = w * (H * d0 - g);
     for (Eigen::Index a = 0; a < size; ++a) {
       const Eigen::Index row = kState * (f.frames[static_cast<size_t>(a / kState)] - first) + a % kState;
       system.eta[row] += b[a];
       for (Eigen::Index c = 0; c < size; ++c) {
         const Eigen::Index column = kState * (f.frames[static_cast<size_t>(c / kState)] - first) + c % kState;
-        system.entries.emplace_back(row, column, H(a, c));
+        system.entries.emplace_back(row, column, w * H(a, c));
       }
     }
   }
@@ -112,6 +116,33 @@ std::optional<Solution> solve(const NormalEquations& system, const Hypothesis& h
   solution.evidence = 0.5 * system.eta.dot(solution.departures) - 0.5 * d.array().log().sum() + 0.5 * prior_log_det;
   if (!std::isfinite(solution.evidence)) return std::nullopt;
   return solution;
+}
+
+/// How far a factor's cost at the departures d stands above its own minimum, doubled: a chi-square with as many
+/// degrees of freedom as the factor's information has rank, when the factor is right.
+struct Misfit {
+  double chi2 = 0.0;
+  int rank = 0;
+};
+
+Misfit misfitOf(const FrameMountFactor& f, const Eigen::VectorXd& departures, const Eigen::Vector3d& nominal) {
+  const auto size = static_cast<Eigen::Index>(kState * f.frames.size());
+  Eigen::VectorXd e(size);  // departure from the factor's linearisation
+  for (Eigen::Index a = 0; a < size; ++a) {
+    e[a] = departures[kState * f.frames[static_cast<size_t>(a / kState)] + a % kState] + nominal[a % kState] - f.factor.linearisation[a];
+  }
+  const Eigen::MatrixXd& H = f.factor.information;
+  const Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> decomposition(H);
+  const Eigen::VectorXd from_minimum = e + decomposition.solve(f.factor.gradient);  // the minimum: e = -H^+ g
+  return {from_minimum.dot(H * from_minimum), static_cast<int>(decomposition.rank())};
+}
+
+/// The chi-square value a right factor of `dof` degrees of freedom exceeds as rarely as a standard normal exceeds
+/// z (Wilson and Hilferty's cube-root normal approximation; z = 2.326: 1%).
+double chiSquareQuantile(int dof, double z) {
+  const double k = std::max(1, dof);
+  const double c = 1.0 - 2.0 / (9.0 * k) + z * std::sqrt(2.0 / (9.0 * k));
+  return k * c * c * c;
 }
 
 enum class Part { tilt, height };
@@ -176,9 +207,33 @@ MountSmoothing smoothMounts(int frames, const std::vector<FrameMountFactor>& fac
   // The whole run, with every factor (the search's own system when it already holds them all).
   const bool search_holds_all = first == 0 && window == frames &&
                                 std::all_of(factors.begin(), factors.end(), [](const FrameMountFactor& f) { return f.chooses_priors; });
-  const auto solution = search_holds_all ? solve(search, h, all_steps)
-                                         : solve(normalEquations(0, frames, factors, nominal, false), h, all_steps);
+  auto solution = search_holds_all ? solve(search, h, all_steps)
+                                   : solve(normalEquations(0, frames, factors, nominal, false), h, all_steps);
   if (!solution) return result;
+  // A factor far above what its own information allows (an estimate misled by the robot's shadow, or a mount that
+  // jumped between frames where the pairs could not see it) pulls its frames off: it is down-weighted by
+  // chi2_limit / chi2 and the run solved again (iteratively reweighted; its weight only falls).
+  if (settings.robust_outlier_z > 0.0) {
+    std::vector<double> weights(factors.size(), 1.0);
+    for (int iteration = 0; iteration < kRobustIterations; ++iteration) {
+      bool changed = false;
+      for (size_t k = 0; k < factors.size(); ++k) {
+        const std::vector<int>& tied = factors[k].frames;
+        if (!usable(factors[k]) || std::any_of(tied.begin(), tied.end(), [frames](int i) { return i < 0 || i >= frames; })) continue;
+        const Misfit m = misfitOf(factors[k], solution->departures, nominal);
+        const double limit = chiSquareQuantile(m.rank, settings.robust_outlier_z);
+        const double chi2 = weights[k] * m.chi2;
+        if (chi2 > limit) {
+          weights[k] *= limit / chi2;
+          changed = true;
+        }
+      }
+      if (!changed) break;
+      const auto reweighted = solve(normalEquations(0, frames, factors, nominal, false, weights), h, all_steps);
+      if (!reweighted) break;
+      solution = reweighted;
+    }
+  }
   result.states.resize(static_cast<size_t>(frames));
   for (int i = 0; i < frames; ++i) {
     const Eigen::Vector3d state = solution->departures.segment<kState>(kState * i) + nominal;

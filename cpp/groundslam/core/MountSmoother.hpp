@@ -35,6 +35,9 @@ struct MountSmoothingSettings {
   double max_tilt_sigma_rad = 0.035;  ///< the widest tilt prior tried (then halved, 8 values)
   double max_height_sigma_m = 0.003;  ///< the widest height prior tried (then halved, 8 values)
   int search_frames = 600;            ///< the priors are chosen on this many frames (the first with factors)
+  /// A factor whose misfit exceeds the chi-square value a right one exceeds with the normal tail of this z is
+  /// down-weighted (0: every factor at full weight).
+  double robust_outlier_z = 2.326;
 };
 
 /// How a mount moves around its calibration: its tilt (radians, roll and pitch alike) and its height (metres).

@@ -306,6 +306,9 @@ struct OutdoorConfig {
   /// An estimate's own variance understates its error on hard images (blur, glare, few matches); this factor
   /// on it decides how much of the estimates' spread counts as noise.
   double variance_inflation = 2.0;
+  /// The whole run's mounts are solved at the end (core/MountSmoother); an estimate whose misfit there exceeds the
+  /// chi-square value a right one exceeds with this normal tail is down-weighted until it does not (0: none is).
+  double mount_outlier_z = 2.326;
 };
 
 struct Config {
@@ -531,6 +534,7 @@ void visitConfigFields(Config_& c, Visitor&& v) {
   v("outdoor", "max_pairs", c.outdoor.max_pairs, Range{3, 100000});
   v("outdoor", "pair_radius_px", c.outdoor.pair_radius_px, kPositive);
   v("outdoor", "variance_inflation", c.outdoor.variance_inflation, Range{1.0, 100.0});
+  v("outdoor", "mount_outlier_z", c.outdoor.mount_outlier_z, Range{0.0, 10.0});
   v("outdoor", "baseline_fraction", c.outdoor.baseline_fraction, Range{0.0, 1.0});
   v("outdoor", "reference_match_radius_m", c.outdoor.reference_match_radius_m, kPositive);
   v("graph", "min_sigma_m", c.graph.min_sigma_m, kNonNegative);

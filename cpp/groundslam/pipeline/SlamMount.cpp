@@ -219,6 +219,7 @@ void Slam::smoothMount() {
   settings.nominal_height_m = calibrated_mount_.translation().z();
   settings.max_tilt_sigma_rad = config_.outdoor.tilt_prior_deg * M_PI / 180.0;
   settings.max_height_sigma_m = config_.outdoor.height_prior_m;
+  settings.robust_outlier_z = config_.outdoor.mount_outlier_z;
   const MountSmoothing smoothing = smoothMounts(frames, mount_factors_, settings, rocking_steps_);
   if (smoothing.states.size() != static_cast<size_t>(frames)) return;
   mount_rocking_ = smoothing.rocking;
