@@ -148,8 +148,9 @@ namespace {
 
 /// A loop candidate between frame 0 of an asphalt loop and a later frame whose features are frame 0's, each moved by
 /// `T_0_later`'s inverse (the identity: every feature where it was in the image, as the robot's shadow, lens dirt or
-/// bumper stay). The robot's estimate puts the later frame 1 cm from frame 0; in between it drove elsewhere.
-LoopCandidate candidateWithFrameZeroSeenAt(const Pose2& T_0_later) {
+/// bumper stay). The robot's estimate puts the later frame 1 cm from frame 0; in between it drove elsewhere. With
+/// `unsure_frame`, the motion into that frame is marked as possibly a repetition off (LoopCloser::motionUnsure).
+LoopCandidate candidateWithFrameZeroSeenAt(const Pose2& T_0_later, int unsure_frame = -1) {
   const sim::SequenceSimulator simulator(asphaltLoop());
   Config config;
   config.camera = cameraConfigOf(asphaltLoop().camera, asphaltLoop().mounting_height_m);
@@ -159,15 +160,18 @@ LoopCandidate candidateWithFrameZeroSeenAt(const Pose2& T_0_later) {
   const GroundFeatures first = preparer.prepare(simulator.renderFrame(0), 0).features;
   const GroundFeatures elsewhere = preparer.prepare(simulator.renderFrame(100), 1).features;
   std::vector<Pose2> estimates = {truth[0]};
+  if (unsure_frame == 0) closer.motionUnsure();
   closer.process(0, kMapSegment, first, estimates);
   const int later = config.loop_closure.database_delay_frames + 1;
   for (int k = 1; k < later; ++k) {
     estimates.push_back(truth[100]);
+    if (unsure_frame == k) closer.motionUnsure();
     closer.process(k, kMapSegment, elsewhere, estimates);
   }
   GroundFeatures moved = first;
   for (Eigen::Vector2d& p : moved.points) p = T_0_later.inverse() * p;
   estimates.push_back(truth[0] * Pose2(0.01, 0.0, 0.0));
+  if (unsure_frame == later) closer.motionUnsure();
   for (const LoopCandidate& c : closer.process(later, kMapSegment, moved, estimates)) {
     if (c.frame_a == 0) return c;
   }
@@ -189,4 +193,21 @@ TEST(LoopGates, AFitOnTheEarlierFramesOwnPoseIsRefusedAsStill) {
   EXPECT_NEAR(revisit.T_a_b.theta, moved.theta, 1e-4);
   // Only the heading outside: 1 mm off and turned 1.5 degrees is a revisit too.
   EXPECT_TRUE(candidateWithFrameZeroSeenAt(Pose2(0.001, 0.0, 1.5 * kDegree)).accepted());
+}
+
+TEST(LoopGates, NoLoopClosureSpansAMotionThatMayBeARepetitionOff) {
+  // The revisit of the test above (4 mm and 1.5 degrees from frame 0), accepted; with the motion into frame 2 or into
+  // the later frame itself marked unsure, the map's estimate of the pair may be a tile off and the candidate is
+  // refused as ambiguous before any matching. A motion before frame 0 (into frame 0 itself) is not between them.
+  const Pose2 moved(0.004, 0.0, 1.5 * kDegree);
+  ASSERT_TRUE(candidateWithFrameZeroSeenAt(moved).accepted());
+  const int later = LoopClosureSettings{}.database_delay_frames + 1;
+  for (int unsure : {2, later}) {
+    const LoopCandidate refused = candidateWithFrameZeroSeenAt(moved, unsure);
+    EXPECT_EQ(refused.frame_a, 0);
+    EXPECT_EQ(refused.rejected_by, LoopGate::ambiguous) << unsure << ": " << loopGateName(refused.rejected_by);
+    EXPECT_EQ(refused.matches, -1);
+  }
+  const LoopCandidate before = candidateWithFrameZeroSeenAt(moved, 0);
+  EXPECT_TRUE(before.accepted()) << loopGateName(before.rejected_by);
 }

@@ -248,6 +248,11 @@ struct OdometryChecks {
   /// Measured: 0.25-0.49 on tiles whose every tile carries one pattern, 0.20-0.37 on a photo of bricks, at most 0.19
   /// on asphalt, concrete, carpet and photos of gravel and grass.
   double floor_repeat_min_strength = 0.22;
+  /// On a floor that repeats, a motion the label does not vouch for (not `ok`) whose inliers fell below this share
+  /// of the recent frames' median may be one repetition off: frames dropped where the fit found the tile before, so
+  /// the overlap, and with it the inliers, fell. No loop closure spans such a motion (LoopCloser::motionUnsure):
+  /// the map's estimate, a loop's only guide among the repetitions, may be a tile off there. 0: off.
+  double repeated_floor_unsure_inlier_share = 0.55;
 };
 
 /// Outdoors and on real robots: features that stay still in the image, and the camera's tilt and height per
@@ -451,6 +456,7 @@ void visitConfigFields(Config_& c, Visitor&& v) {
   v("odometry", "bridge_spectral_min_peak", c.odometry_checks.bridge_spectral_min_peak, Range{0.0, 1.0});
   v("odometry", "floor_repeat_check_frames", c.odometry_checks.floor_repeat_check_frames, Range{0, 1000000});
   v("odometry", "floor_repeat_min_strength", c.odometry_checks.floor_repeat_min_strength, Range{0.0, 1.0});
+  v("odometry", "repeated_floor_unsure_inlier_share", c.odometry_checks.repeated_floor_unsure_inlier_share, Range{0.0, 1.0});
   v("odometry", "fallback_sigma_m", c.fallback.sigma_m, kPositive);
   v("odometry", "fallback_sigma_rad", c.fallback.sigma_rad, kPositive);
   v("odometry", "fallback_turn_min_inliers", c.fallback.turn_min_inliers, Range{0, 1000000});

@@ -67,6 +67,8 @@ std::vector<LoopCandidate> LoopCloser::process(int frame, int segment, const Gro
                                    estimates[static_cast<size_t>(frame) - 1].translation()).norm()
                                 : 0.0;
   path_length_m_.push_back((path_length_m_.empty() ? 0.0 : path_length_m_.back()) + step);
+  unsure_motions_.push_back((unsure_motions_.empty() ? 0 : unsure_motions_.back()) + (next_motion_unsure_ ? 1 : 0));
+  next_motion_unsure_ = false;
   std::vector<LoopCandidate> candidates;
   if (searchDue()) candidates = verifyCandidates(frame, features, bow, estimates);
   pending_.push_back({frame, features, std::move(bow)});
@@ -101,6 +103,17 @@ std::vector<LoopCandidate> LoopCloser::verifyCandidates(int frame, const GroundF
   for (const BowMatch& match : selectCandidates(frame, bow, estimates)) {
     // More loop edges of one frame add little to its pose: verification stops at max_accepted_per_frame.
     if (accepted >= settings_.max_accepted_per_frame) break;
+    if (unsure_motions_[static_cast<size_t>(frame)] > unsure_motions_[static_cast<size_t>(match.frame)]) {
+      // Not in the paper: the map's estimate picks among a repeated floor's look-alike places, and across a motion
+      // that may be a repetition off it may pick the wrong one (motionUnsure).
+      LoopCandidate refused;
+      refused.frame_a = match.frame;
+      refused.frame_b = frame;
+      refused.bow_score = match.score;
+      refused.rejected_by = LoopGate::ambiguous;
+      candidates.push_back(refused);
+      continue;
+    }
     const TransformPrior prior = priorOf(match.frame, frame, estimates);
     LoopCandidate candidate = verify(match.frame, places_.find(match.frame)->features(), frame, features, match.score, prior, fitting_);
     if (!std::isnan(candidate.covariance_score)) {
@@ -296,6 +309,7 @@ void LoopCloser::adoptPriorMap(const FeatureMap& prior) {
   for (const MapFeature& f : prior.features()) feature_map_.addStoredFeature(f);
   segment_of_frame_.assign(prior.anchors().size(), kMapSegment);
   path_length_m_.assign(prior.anchors().size(), 0.0);
+  unsure_motions_.assign(prior.anchors().size(), 0);
 }
 
 std::optional<LoopCandidate> LoopCloser::localizeOnPriorMap(int frame, const GroundFeatures& features,

@@ -130,6 +130,9 @@ class LoopCloser {
   /// The run's odometry met a rival repetition: from now on the floor is taken to repeat, and global localization
   /// compares the winner's votes with its rivals' (LocalizationSettings::max_vote_ratio, not unrepeated_max_vote_ratio).
   void floorRepeats() { floor_repeats_ = true; }
+  /// The motion into the next frame given to process() may be one repetition off (Slam: on a floor that repeats,
+  /// a motion not vouched for whose inliers fell): no prior-guided loop closure spans it.
+  void motionUnsure() { next_motion_unsure_ = true; }
   /// Tracking was lost after the last frame processed: the frames still waiting their k frames become places
   /// and map keyframes at once. The delay keeps neighbours from closing loops, and across a loss there are no
   /// neighbours (candidates never cross segments); relocalization can then find the ground seen just before,
@@ -227,6 +230,8 @@ class LoopCloser {
   PlaceMap places_;
   std::deque<Pending> pending_;        ///< the last k frames, not yet in the map
   std::vector<double> path_length_m_;  ///< estimated distance driven up to each frame
+  std::vector<int> unsure_motions_;    ///< motions that may be a repetition off, up to each frame (motionUnsure)
+  bool next_motion_unsure_ = false;
   std::deque<std::pair<int, int>> recent_loops_;  ///< (frame_a, frame_b) of the latest accepted loop closures
 };
 

@@ -188,6 +188,7 @@ FrameResult Slam::process(PreparedFrame prepared) {
                     : !vouched ? FrameStatus::uncertain
                                           : FrameStatus::ok;
     if (odometry.fallback) result.fallback_reason = odometry.fit_status;
+    if (loop_closer_ && mayBeARepetitionOff(result)) loop_closer_->motionUnsure();
     if (!odometry.fallback && !odometry.used.empty() && !atRest(odometry.T_prev_curr, odometry.used, current)) seen_moving_ = true;
     tied_to_previous = !odometry.fallback;
     measured_.push_back((!odometry.fallback && !lost_) || map_start_ == frame);
@@ -774,6 +775,24 @@ bool Slam::plausibleMotion(const Pose2& T_prev_curr, double previous_time, doubl
   const OdometryChecks& checks = config_.odometry_checks;
   return (T_prev_curr.translation() - predicted).norm() <=
          checks.max_velocity_change_m + checks.max_velocity_change_fraction * predicted.norm();
+}
+
+bool Slam::mayBeARepetitionOff(const FrameResult& result) {
+  // The recent frames' inliers, before this one joins them.
+  std::array<int, kRecentSteps * 2> counts{};
+  const auto end = std::copy(recent_inliers_.begin(), recent_inliers_.end(), counts.begin());
+  if (result.inliers > 0) {
+    recent_inliers_.push_back(result.inliers);
+    if (recent_inliers_.size() > counts.size()) recent_inliers_.pop_front();
+  }
+  const double share = config_.odometry_checks.repeated_floor_unsure_inlier_share;
+  const int frame = static_cast<int>(graph_.poses().size()) - 1;
+  if (!(share > 0.0) || result.status == FrameStatus::ok || end == counts.begin() || !(floor_looks_repeated_ || repeatedFloor(frame))) {
+    return false;
+  }
+  const auto middle = counts.begin() + (end - counts.begin()) / 2;
+  std::nth_element(counts.begin(), middle, end);
+  return result.inliers < share * *middle;
 }
 
 bool Slam::spansGap(double steps) const {

@@ -306,6 +306,10 @@ class Slam {
   /// The fit's own covariance keeps its motion within the `ok` tolerance (OdometryChecks::ok_sigmas), and a fit at rest
   /// comes after the robot was seen moving (seen_moving_).
   bool vouchedFor(const OdometryEdge& odometry, const Keyframe& current) const;
+  /// On a floor that repeats: a motion not vouched for (not `ok`) whose inliers fell below
+  /// odometry.repeated_floor_unsure_inlier_share of the recent frames' median may be one repetition off (frames
+  /// dropped where the fit found the tile before). Keeps the frame's inliers among the recent ones.
+  bool mayBeARepetitionOff(const FrameResult& result);
   /// Every match the fit used stays where it was in the image (within movedDistanceM on the ground).
   bool atRest(const Pose2& fitted, const std::vector<Match>& used, const Keyframe& current) const;
   /// Every keypoint of the frame stays where it was in the image under the motion (within movedDistanceM on the ground).
@@ -535,6 +539,7 @@ class Slam {
     Bridge bridge;
   };
   std::optional<PendingBridge> pending_search_;
+  std::deque<int> recent_inliers_;  ///< the last 2 kRecentSteps frames' inliers (those with a fit)
   std::deque<Pose2> recent_steps_;  ///< the last kRecentSteps good motions, a gap's shared among its steps
   size_t steps_since_turn_ = 0;     ///< good motions since the last sharp turn (recent_steps_ before it point elsewhere)
   std::optional<std::pair<Pose2, double>> before_turn_;  ///< the usual step before the last sharp turn, and its turn
