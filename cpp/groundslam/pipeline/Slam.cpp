@@ -786,8 +786,7 @@ bool Slam::mayBeARepetitionOff(const FrameResult& result) {
     if (recent_inliers_.size() > counts.size()) recent_inliers_.pop_front();
   }
   const double share = config_.odometry_checks.repeated_floor_unsure_inlier_share;
-  const int frame = static_cast<int>(graph_.poses().size()) - 1;
-  if (!(share > 0.0) || result.status == FrameStatus::ok || end == counts.begin() || !(floor_looks_repeated_ || repeatedFloor(frame))) {
+  if (!(share > 0.0) || result.status == FrameStatus::ok || end == counts.begin() || !floor_looks_repeated_) {
     return false;
   }
   const auto middle = counts.begin() + (end - counts.begin()) / 2;

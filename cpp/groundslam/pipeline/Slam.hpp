@@ -306,9 +306,9 @@ class Slam {
   /// The fit's own covariance keeps its motion within the `ok` tolerance (OdometryChecks::ok_sigmas), and a fit at rest
   /// comes after the robot was seen moving (seen_moving_).
   bool vouchedFor(const OdometryEdge& odometry, const Keyframe& current) const;
-  /// On a floor that repeats: a motion not vouched for (not `ok`) whose inliers fell below
-  /// odometry.repeated_floor_unsure_inlier_share of the recent frames' median may be one repetition off (frames
-  /// dropped where the fit found the tile before). Keeps the frame's inliers among the recent ones.
+  /// On a floor whose images repeat (odometry.floor_repeat_*): a motion not vouched for (not `ok`) whose inliers
+  /// fell below odometry.repeated_floor_unsure_inlier_share of the recent frames' median may be one repetition off
+  /// (frames dropped where the fit found the tile before). Keeps the frame's inliers among the recent ones.
   bool mayBeARepetitionOff(const FrameResult& result);
   /// Every match the fit used stays where it was in the image (within movedDistanceM on the ground).
   bool atRest(const Pose2& fitted, const std::vector<Match>& used, const Keyframe& current) const;
