@@ -60,6 +60,8 @@ struct MountSmoothing {
 /// factor naming another frame is ignored) under AR(1) priors on the tilt (roll and pitch alike) and on the
 /// height. Each prior's sigma and correlation (0 to 0.98) are chosen by the factors' marginal likelihood: a
 /// rigid mount gets small priors, so its frames stay at the calibration instead of following the estimates' noise.
+/// Then a factor far above what its own information allows (settings.robust_outlier_z) is down-weighted and the
+/// run solved again (iteratively reweighted, five rounds at most; the priors stay as chosen).
 /// steps[i]: how many of the prior's steps lie between frames i - 1 and i (1 when absent; frames dropped
 /// between them, or a jump in speed that says so, make it more): their correlation is then correlation^steps.
 MountSmoothing smoothMounts(int frames, const std::vector<FrameMountFactor>& factors, const MountSmoothingSettings& settings,

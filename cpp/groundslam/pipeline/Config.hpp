@@ -312,7 +312,8 @@ struct OutdoorConfig {
   /// on it decides how much of the estimates' spread counts as noise.
   double variance_inflation = 2.0;
   /// The whole run's mounts are solved at the end (core/MountSmoother); an estimate whose misfit there exceeds the
-  /// chi-square value a right one exceeds with this normal tail is down-weighted until it does not (0: none is).
+  /// chi-square value a right one exceeds with this normal tail has its weight cut to that value over its weighted
+  /// misfit and the run is solved again, five rounds at most (0: none is).
   double mount_outlier_z = 2.326;
 };
 

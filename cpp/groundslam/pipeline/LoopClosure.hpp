@@ -89,7 +89,7 @@ struct LoopCandidate {
   int frame_a = 0;
   int frame_b = 0;
   double bow_score = 0.0;
-  int matches = -1;                    ///< -1 when gate 1 already rejected it
+  int matches = -1;                    ///< -1 when gate 1 rejected it, or a motion between the frames was unsure
   double covariance_score = std::nan("");  ///< NaN when not fitted, +inf when the fit failed
   int inliers = 0;
   double ambiguity = std::nan("");     ///< rival transform's support / the fit's; NaN when not fitted
