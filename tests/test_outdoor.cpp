@@ -244,8 +244,11 @@ TEST(MountSmoother, AnEstimateFarFromWhatItsOwnPrecisionAllowsIsDownWeighted) {
   // its neighbours' factors. Measured: frame 60's tilt 1.07 degrees off -> 0.14, the whole chain 0.097 -> 0.051.
   const ChainFault robust{60, 2.0, true}, plain{60, 2.0, false};
   const ChainResult with = smoothChain(0.5, 0.002, 120, 0, 0.0, {}, robust), without = smoothChain(0.5, 0.002, 120, 0, 0.0, {}, plain);
+  EXPECT_GT(without.misled_tilt_deg, 0.7);
+  EXPECT_LT(with.misled_tilt_deg, 0.3);
   EXPECT_LT(with.misled_tilt_deg, 0.5 * without.misled_tilt_deg);
   EXPECT_LT(with.smoothed_tilt_deg, without.smoothed_tilt_deg);
+  EXPECT_LT(with.smoothed_tilt_deg, 0.07);
   // Without a misled frame, the chain is solved as before (measured: identical, 0.0485 degrees).
   const ChainResult clean = smoothChain(0.5, 0.002, 120), clean_plain = smoothChain(0.5, 0.002, 120, 0, 0.0, {}, {-1, 0.0, false});
   EXPECT_NEAR(clean.smoothed_tilt_deg, clean_plain.smoothed_tilt_deg, 0.002);

@@ -24,6 +24,11 @@ bool usable(const FrameMountFactor& f) {
          t.linearisation.size() == size && t.information.allFinite() && t.gradient.allFinite() && t.linearisation.allFinite();
 }
 
+/// Every frame the factor ties lies within first .. first+count-1.
+bool tiesFramesWithin(const FrameMountFactor& f, int first, int count) {
+  return std::all_of(f.frames.begin(), f.frames.end(), [&](int frame) { return frame >= first && frame < first + count; });
+}
+
 /// The factors over frames first .. first+count-1 in departures d from the nominal state: their summed cost is
 /// 1/2 d^T H d - eta^T d + const.
 struct NormalEquations {
@@ -41,10 +46,7 @@ NormalEquations normalEquations(int first, int count, const std::vector<FrameMou
   for (size_t k = 0; k < factors.size(); ++k) {
     const FrameMountFactor& f = factors[k];
     const double w = k < weights.size() ? weights[k] : 1.0;
-    if (!usable(f) || (choosing_priors && !f.chooses_priors) || !(w > 0.0)) continue;
-    bool inside = true;
-    for (int frame : f.frames) inside = inside && frame >= first && frame < first + count;
-    if (!inside) continue;
+    if (!usable(f) || (choosing_priors && !f.chooses_priors) || !(w > 0.0) || !tiesFramesWithin(f, first, count)) continue;
     const auto size = static_cast<Eigen::Index>(kState * f.frames.size());
     const Eigen::MatrixXd& H = f.factor.information;
     const Eigen::VectorXd& g = f.factor.gradient;
@@ -218,8 +220,7 @@ MountSmoothing smoothMounts(int frames, const std::vector<FrameMountFactor>& fac
     for (int iteration = 0; iteration < kRobustIterations; ++iteration) {
       bool changed = false;
       for (size_t k = 0; k < factors.size(); ++k) {
-        const std::vector<int>& tied = factors[k].frames;
-        if (!usable(factors[k]) || std::any_of(tied.begin(), tied.end(), [frames](int i) { return i < 0 || i >= frames; })) continue;
+        if (!usable(factors[k]) || !tiesFramesWithin(factors[k], 0, frames)) continue;
         const Misfit m = misfitOf(factors[k], solution->departures, nominal);
         const double limit = chiSquareQuantile(m.rank, settings.robust_outlier_z);
         const double chi2 = weights[k] * m.chi2;

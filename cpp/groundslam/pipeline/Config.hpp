@@ -250,8 +250,9 @@ struct OdometryChecks {
   double floor_repeat_min_strength = 0.22;
   /// On a floor whose images repeat (floor_repeat_*), a motion the label does not vouch for (not `ok`) whose
   /// inliers fell below this share of the recent frames' median may be one repetition off: frames dropped where the
-  /// fit found the tile before, so the overlap, and with it the inliers, fell. No loop closure spans such a motion (LoopCloser::motionUnsure):
-  /// the map's estimate, a loop's only guide among the repetitions, may be a tile off there. 0: off.
+  /// fit found the tile before, so the overlap, and with it the inliers, fell. No prior-guided loop closure spans
+  /// such a motion (LoopCloser::motionUnsure): the map's estimate, a loop's only guide among the repetitions, may be
+  /// a tile off there. 0: off.
   double repeated_floor_unsure_inlier_share = 0.55;
 };
 

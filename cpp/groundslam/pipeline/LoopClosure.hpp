@@ -130,8 +130,8 @@ class LoopCloser {
   /// The run's odometry met a rival repetition: from now on the floor is taken to repeat, and global localization
   /// compares the winner's votes with its rivals' (LocalizationSettings::max_vote_ratio, not unrepeated_max_vote_ratio).
   void floorRepeats() { floor_repeats_ = true; }
-  /// The motion into the next frame given to process() may be one repetition off (Slam: on a floor that repeats,
-  /// a motion not vouched for whose inliers fell): no prior-guided loop closure spans it.
+  /// The motion into the next frame given to process() may be one repetition off (Slam: on a floor whose images
+  /// repeat, a motion not vouched for whose inliers fell): no prior-guided loop closure spans it.
   void motionUnsure() { next_motion_unsure_ = true; }
   /// Tracking was lost after the last frame processed: the frames still waiting their k frames become places
   /// and map keyframes at once. The delay keeps neighbours from closing loops, and across a loss there are no
