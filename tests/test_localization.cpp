@@ -349,6 +349,48 @@ TEST(Relocalization, AMotionRefusedForItsSpeedIsBridgedToTheLastTrackedFrame) {
   for (size_t k = 122; k < shown.size(); ++k) EXPECT_EQ(unbridged[k].status, FrameStatus::lost) << k;
 }
 
+TEST(Relocalization, AWeakBridgeIsBelievedWhereItAgreesWithTheLostSegment) {
+  // Frame 120 is blank: tracking is lost for too few matches and frames 120-121 are placed by the robot's steps, which
+  // on a loop at an even speed put frame 121 within a millimetre of the truth. Frame 121's features against frame
+  // 119's are a bridge too weak for a loop closure here (loop_closure.min_inliers set out of reach): believed only
+  // because the fit agrees with the lost segment's own estimate (odometry.bridge_corroboration_*). Image alignment, the
+  // motion search, global localization and the map's places near the robot are kept out, so nothing else joins it.
+  auto settings = session("asphalt", sim::PathKind::loop, 400, 5);
+  settings.ground_seed.reset();
+  const sim::SequenceSimulator simulator(settings);
+  const cv::Mat blank(simulator.renderFrame(0).size(), CV_8U, cv::Scalar(128));
+  const auto run = [&](int min_inliers, double agreement_m, std::vector<FrameStatus>& status) {
+    Config config = configFor(settings);
+    config.loop_closure.min_inliers = 100000;
+    config.odometry_checks.align_images = false;
+    config.odometry_checks.bridge_search_turn_deg = 0.0;
+    config.odometry_checks.bridge_spectral_min_peak = 0.0;
+    config.localization.min_votes = 1e8;
+    config.loop_closure.lost_reach_m = 0.0;
+    config.odometry_checks.bridge_corroborated_min_inliers = min_inliers;
+    config.odometry_checks.bridge_corroboration_m = agreement_m;
+    Slam slam(config, shippedVocabulary());
+    for (int i = 0; i < 130; ++i) status.push_back(slam.process(i == 120 ? blank : simulator.renderFrame(i), i).status);
+    slam.finish();
+    return slam.trajectory();
+  };
+  std::vector<FrameStatus> corroborated, off, disagreeing;
+  const Trajectory estimated = run(8, 0.003, corroborated);
+  run(0, 0.003, off);
+  run(8, 1e-6, disagreeing);
+  EXPECT_EQ(corroborated[120], FrameStatus::lost);
+  EXPECT_EQ(corroborated[121], FrameStatus::relocalized);
+  for (int i = 122; i < 130; ++i) EXPECT_EQ(corroborated[size_t(i)], FrameStatus::ok) << i;
+  const Pose2 joined = between(estimated[119].T_world_robot, estimated[121].T_world_robot);
+  const Pose2 true_motion = between(simulator.groundTruth()[119], simulator.groundTruth()[121]);
+  EXPECT_LT((joined.translation() - true_motion.translation()).norm(), 0.0005);
+  EXPECT_LT(std::abs(wrapAngle(joined.theta - true_motion.theta)), 0.05 * M_PI / 180.0);
+  for (int i = 121; i < 130; ++i) {
+    EXPECT_EQ(off[size_t(i)], FrameStatus::lost) << i;
+    EXPECT_EQ(disagreeing[size_t(i)], FrameStatus::lost) << i;
+  }
+}
+
 TEST(Relocalization, ALossInsideALostSegmentIsBridgedToThatSegmentNotLeftAdrift) {
   // Carried 80 cm away (frames 250-329 never seen) with global localization kept out (a weak floor where it finds
   // nothing), and the map's places near the lost frames too (loop_closure.lost_reach_m 0): from frame 330 the robot

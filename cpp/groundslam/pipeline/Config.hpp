@@ -224,6 +224,14 @@ struct OdometryChecks {
   /// after the last tracked one is measured against it (its features, else the images aligned); the first that is
   /// joins the lost segment to the map. 0: off.
   int bridge_max_frames = 3;
+  /// Where every other bridge fails (tried last: they measure the motion better), a bridging frame's features with
+  /// fewer inliers than a loop closure needs, but at least this many, are believed
+  /// when their motion agrees with what the lost segment says since the last tracked frame (the loss frame's own fit,
+  /// too weak to keep tracking, then the segment's odometry) within bridge_corroboration_m and _deg: two fits through
+  /// different image pairs that agree. 0: off.
+  int bridge_corroborated_min_inliers = 8;
+  double bridge_corroboration_m = 0.003;    ///< the two agree within this,
+  double bridge_corroboration_deg = 0.6;    ///< and this
   /// Where a bridging frame's features and image both fail (a quarter turn on the spot over a weak floor under a
   /// shadow that turns with it, a few frames dropped without a trace), the motions the robot can have made since
   /// the last tracked frame are searched (core/MotionSearch.hpp): one usual step and a turn on the spot, every
@@ -450,6 +458,9 @@ void visitConfigFields(Config_& c, Visitor&& v) {
   v("odometry", "repetition_support_ratio", c.odometry_checks.repetition_support_ratio, kNonNegative);
   v("odometry", "restart_map_below_frames", c.odometry_checks.restart_map_below_frames, Range{0, 1e9});
   v("odometry", "bridge_max_frames", c.odometry_checks.bridge_max_frames, Range{0, 1000});
+  v("odometry", "bridge_corroborated_min_inliers", c.odometry_checks.bridge_corroborated_min_inliers, Range{0, 100000});
+  v("odometry", "bridge_corroboration_m", c.odometry_checks.bridge_corroboration_m, kPositive);
+  v("odometry", "bridge_corroboration_deg", c.odometry_checks.bridge_corroboration_deg, kPositive);
   v("odometry", "bridge_search_turn_deg", c.odometry_checks.bridge_search_turn_deg, Range{0.0, 30.0});
   v("odometry", "bridge_search_radius_m", c.odometry_checks.bridge_search_radius_m, Range{0.0, 0.05, true});
   v("odometry", "bridge_search_max_hamming", c.odometry_checks.bridge_search_max_hamming, Range{0, 256});

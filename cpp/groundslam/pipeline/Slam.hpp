@@ -187,6 +187,8 @@ class Slam {
   bool backOnTheTrackedPose(const Bridge& bridge) const;
   /// The current frame's features fitted to the last tracked frame's, believed as a loop closure would be.
   std::optional<Bridge> bridgeByFeatures(const Keyframe& current) const;
+  /// A bridge by features too weak alone, believed when it agrees with the lost segment's own estimate.
+  std::optional<Bridge> corroboratedBridge(const Keyframe& current) const;
   /// The current image aligned with the last tracked frame's (started from as many usual steps as frames passed).
   std::optional<Bridge> bridgeByAlignment(const Keyframe& current, const AlignmentImage& alignment) const;
   /// The current frame's motion from the last tracked frame, searched among the motions the robot can have made

@@ -31,6 +31,7 @@ void Slam::bridgeLoss(const Keyframe& current, const PreparedFrame& prepared, Fr
     if (!bridge) bridge = moved(bridgeByAlignment(current, prepared.alignment));
   }
   if (!bridge) bridge = confirmedSearch(current, prepared);
+  if (!bridge && frames_since >= 2) bridge = moved(corroboratedBridge(current));
   result.times.loop_ms += timer.lap();
   if (!bridge) return;
   graph_.addEdge({tracked_frame_, current.index, bridge->T_tracked_current,
@@ -72,6 +73,32 @@ std::optional<Slam::Bridge> Slam::bridgeByFeatures(const Keyframe& current) cons
   }
   const bool decisive = fit.inliers >= checks.decisive_inlier_share * static_cast<double>(matches.size());
   if (!decisive && !plausibleMotion(fit.T_target_source, tracked_time_, current.timestamp)) return std::nullopt;
+  return Bridge{fit.T_target_source, fit.covariance};
+}
+
+std::optional<Slam::Bridge> Slam::corroboratedBridge(const Keyframe& current) const {
+  // The last resort: too few inliers to be believed alone, as on a weak floor where one blurred or turning image lost
+  // the robot. The lost segment's own estimate since the last tracked frame went through other images (the loss
+  // frame's weak fit, then the segment's odometry): a look-alike fit rarely lands within millimetres of it, the true
+  // motion does. Tried after the other bridges, which measure the motion better where they succeed.
+  const OdometryChecks& checks = config_.odometry_checks;
+  if (checks.bridge_corroborated_min_inliers <= 0) return std::nullopt;
+  const Keyframe& tracked = *tracked_keyframe_;
+  const std::vector<Match> matches =
+      withoutRobotArtifacts(matcher_.match(current.features.descriptors, tracked.features.descriptors), tracked, current);
+  FitSettings relaxed = odometry_fitting_;
+  relaxed.min_inliers = checks.bridge_corroborated_min_inliers;
+  const RigidEstimate fit = fitMatches(matches, tracked, current, relaxed);
+  if (!fit.ok() || fit.covarianceScore() > config_.loop_closure.max_covariance_score || fit.ambiguity() > checks.max_ambiguity) {
+    return std::nullopt;
+  }
+  const std::vector<Pose2>& poses = graph_.poses();
+  const Pose2 by_segment = between(poses[static_cast<size_t>(tracked_frame_)], poses[static_cast<size_t>(current.index)]);
+  const Pose2 disagreement = by_segment.inverse() * fit.T_target_source;
+  if (disagreement.translation().norm() > checks.bridge_corroboration_m ||
+      std::abs(disagreement.theta) > checks.bridge_corroboration_deg * M_PI / 180.0) {
+    return std::nullopt;
+  }
   return Bridge{fit.T_target_source, fit.covariance};
 }
 
