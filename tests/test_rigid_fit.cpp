@@ -229,3 +229,29 @@ TEST(RigidFit, WithinAtSigmasJudgesTheHeadingAndThePositionAlongItsWorstDirectio
   EXPECT_FALSE(withinAtSigmas(c, 3.0, 0.005, 0.5 * deg));
   EXPECT_TRUE(withinAtSigmas(c, 2.0, 0.005, 0.5 * deg));  // 4.1 mm
 }
+
+TEST(RigidFit, AWeakFitsChanceRivalShowsNoRepetitionATilesRivalDoes) {
+  // A weak floor: 11 matches move with the robot, 4 more agree by chance on a transform 3 cm away. That rival has
+  // a third of the fit's inliers, so it is listed, but no fit of 4 inliers would be believed.
+  const Pose2 truth(0.01, 0.0, 0.02), elsewhere(-0.02, 0.01, 0.0);
+  const Correspondences moved = makeCorrespondences(truth, 11, 0.0, 3), chance = makeCorrespondences(elsewhere, 4, 0.0, 4);
+  Correspondences weak = moved;
+  weak.target.insert(weak.target.end(), chance.target.begin(), chance.target.end());
+  weak.source.insert(weak.source.end(), chance.source.begin(), chance.source.end());
+  FitSettings settings;
+  settings.measure_ambiguity = true;
+  settings.min_inliers = 8;
+  const RigidEstimate fit = fitRigidTransform(weak.target, weak.source, settings);
+  ASSERT_TRUE(fit.ok());
+  EXPECT_LT((fit.T_target_source.translation() - truth.translation()).norm(), 0.0005);
+  ASSERT_FALSE(fit.rivals.empty());
+  EXPECT_EQ(fit.rival_inliers, 4);
+  EXPECT_FALSE(showsARepetition(fit, 12));
+  EXPECT_TRUE(showsARepetition(fit, 4));
+  // Tiles: every repetition is matched, the rival one tile over has dozens of inliers.
+  const Correspondences tiles = tiledCorrespondences(Pose2(0.01, 0.0, 0.0));
+  const RigidEstimate tiled = fitRigidTransform(tiles.target, tiles.source, settings);
+  ASSERT_TRUE(tiled.ok());
+  EXPECT_GE(tiled.rival_inliers, 40);
+  EXPECT_TRUE(showsARepetition(tiled, 12));
+}

@@ -336,4 +336,8 @@ bool withinAtSigmas(const Eigen::Matrix3d& covariance, double sigmas, double wit
   return sigmas * sigma_rad <= within_rad && sigmas * sigma_m <= within_m;
 }
 
+bool showsARepetition(const RigidEstimate& fit, int min_inliers) {
+  return !fit.rivals.empty() && fit.rival_inliers >= min_inliers;
+}
+
 }  // namespace groundslam

@@ -94,4 +94,8 @@ Pose2 leastSquaresRigid(const std::vector<Eigen::Vector2d>& target, const std::v
 /// make one direction worse than either axis).
 bool withinAtSigmas(const Eigen::Matrix3d& covariance, double sigmas, double within_m, double within_rad);
 
+/// Whether the fit shows the floor repeating: a rival transform (measure_ambiguity) with at least `min_inliers`
+/// inliers, what a fit itself needs. A weak fit's rivals of a few matches agreeing by chance show nothing.
+bool showsARepetition(const RigidEstimate& fit, int min_inliers);
+
 }  // namespace groundslam
