@@ -349,6 +349,22 @@ TEST(Relocalization, AMotionRefusedForItsSpeedIsBridgedToTheLastTrackedFrame) {
   for (size_t k = 122; k < shown.size(); ++k) EXPECT_EQ(unbridged[k].status, FrameStatus::lost) << k;
 }
 
+TEST(Relocalization, WhichLossesMayBeBridged) {
+  // Too little evidence, or everything left in place: bridged unless the fits show a rival repetition.
+  for (FitStatus failed : {FitStatus::too_few_matches, FitStatus::too_few_inliers, FitStatus::degenerate, FitStatus::still}) {
+    EXPECT_TRUE(bridgeableLoss(failed, false, false)) << fitStatusName(failed);
+    EXPECT_TRUE(bridgeableLoss(failed, false, true)) << fitStatusName(failed);
+    EXPECT_FALSE(bridgeableLoss(failed, true, false)) << fitStatusName(failed);
+  }
+  // The robot's speed (frames dropped without a trace) and a rival: only where neither fits nor images show a repetition.
+  for (FitStatus failed : {FitStatus::implausible_motion, FitStatus::ambiguous}) {
+    EXPECT_TRUE(bridgeableLoss(failed, false, false)) << fitStatusName(failed);
+    EXPECT_FALSE(bridgeableLoss(failed, false, true)) << fitStatusName(failed);
+    EXPECT_FALSE(bridgeableLoss(failed, true, false)) << fitStatusName(failed);
+  }
+  EXPECT_FALSE(bridgeableLoss(FitStatus::solver_failed, false, false));
+}
+
 TEST(Relocalization, AWeakBridgeIsBelievedWhereItAgreesWithTheLostSegment) {
   // Frame 120 is blank: tracking is lost for too few matches and frames 120-121 are placed by the robot's steps, which
   // on a loop at an even speed put frame 121 within a millimetre of the truth. Frame 121's features against frame

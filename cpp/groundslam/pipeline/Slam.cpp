@@ -308,17 +308,8 @@ int Slam::addUnmeasuredMotion(const OdometryEdge& failed) {
 void Slam::startSegment(const OdometryEdge& failed) {
   // The relocalization edge, not this one, will decide where the new segment lies.
   const int to = addUnmeasuredMotion(failed);
-  // A motion refused for its speed alone (frames dropped without a trace) is bridged too: the bridge believes only
-  // what a loop closure would, over the time between the two frames.
-  // Not after a motion unlike the robot's on a floor the images show repeating: frames dropped without a trace
-  // leave the gap's length unknown, and a bridge lands one repetition short of it as readily as right.
-  const bool unknown_gap = failed.fit_status == FitStatus::implausible_motion && floor_looks_repeated_;
-  // A fit refused for a rival where neither the fits nor the images show the floor repeating had a rival of fewer
-  // inliers than a fit needs (showsARepetition): too little evidence on a weak floor, not a repetition.
-  const bool weak_rival = failed.fit_status == FitStatus::ambiguous && !floor_looks_repeated_;
-  bridgeable_loss_ = (tooLittleEvidence(failed.fit_status) || failed.fit_status == FitStatus::implausible_motion ||
-                      failed.fit_status == FitStatus::still || weak_rival) && !repeatedFloor(to) &&
-                     !unknown_gap;
+  // The bridge believes only what a loop closure would, over the time between the two frames.
+  bridgeable_loss_ = bridgeableLoss(failed.fit_status, repeatedFloor(to), floor_looks_repeated_);
   loop_closer_->trackingLost(graph_.poses());
   pending_search_.reset();
   ever_lost_ = true;

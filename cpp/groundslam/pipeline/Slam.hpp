@@ -55,6 +55,13 @@ struct OdometryEdge {
   bool turn_measured = false;  ///< a fallback whose turn was measured: by the refused fit or by the images' spectra
 };
 
+/// Whether a loss for `failed` may be bridged to the last tracked frame (Slam::bridgeLoss): a loss for too little
+/// evidence, for the robot's speed or for a fit that left everything in place, on a floor whose fits show no rival
+/// repetition (showsARepetition); for the speed not where the images show the floor repeating either (a gap of
+/// unknown length lands one repetition short as readily as right); for a rival only where neither shows one (then
+/// the rival had fewer inliers than a fit needs: a weak floor, not a repetition).
+bool bridgeableLoss(FitStatus failed, bool fits_show_repetition, bool images_show_repetition);
+
 class Slam {
  public:
   /// `vocabulary` may be null when loop closure is disabled in the configuration. Throws

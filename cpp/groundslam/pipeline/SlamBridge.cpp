@@ -13,6 +13,17 @@
 
 namespace groundslam {
 
+bool bridgeableLoss(FitStatus failed, bool fits_show_repetition, bool images_show_repetition) {
+  if (fits_show_repetition) return false;
+  // A motion refused for its speed alone: frames dropped without a trace. Where the images show the floor repeating,
+  // the gap's unknown length lets a bridge land one repetition short as readily as right.
+  if (failed == FitStatus::implausible_motion) return !images_show_repetition;
+  // A fit refused for a rival where neither the fits nor the images show a repetition: the rival had fewer inliers
+  // than a fit needs, a weak floor's chance agreement.
+  if (failed == FitStatus::ambiguous) return !images_show_repetition;
+  return tooLittleEvidence(failed) || failed == FitStatus::still;
+}
+
 void Slam::bridgeLoss(const Keyframe& current, const PreparedFrame& prepared, FrameResult& result) {
   const int frames_since = current.index - tracked_frame_;
   // Only a loss for too little evidence (one blurred or covered image, a patch of smooth floor) or for the robot's
