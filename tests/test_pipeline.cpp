@@ -223,6 +223,30 @@ TEST(Slam, AMotionUnlikeTheRobotsSpeedIsBelievedOnlyWhenTheImagesLeaveNoDoubt) {
   EXPECT_EQ(unchecked.process(simulator.renderFrame(16), 16.0).statusName(), "ok");
 }
 
+TEST(Slam, SeveralLongStepsInARowAreTheRobotsNewSpeed) {
+  // A straight lane at 1 cm per frame, then at 3 cm per frame interval (every third frame shown, timestamps
+  // continuous): one such motion spans a gap, three in a row say the robot sped up (odometry.speed_change_frames),
+  // and from then on a 3 cm motion is an ordinary step. Never believing it, every later frame would say gap.
+  sim::SimulationSettings settings;
+  settings.path.kind = sim::PathKind::lawnmower;  // the first lane is straight
+  settings.path.frames = 40;
+  const sim::SequenceSimulator simulator(settings);
+  const auto run = [&](int speed_change_frames) {
+    Config config = configFor(settings);
+    config.odometry_checks.speed_change_frames = speed_change_frames;
+    Slam slam(config, nullptr);  // odometry only
+    std::vector<std::string> status;
+    for (int i = 0; i < 10; ++i) status.push_back(slam.process(simulator.renderFrame(i), i).statusName());
+    for (int k = 1; k <= 8; ++k) status.push_back(slam.process(simulator.renderFrame(9 + 3 * k), 9.0 + k).statusName());
+    return status;
+  };
+  const std::vector<std::string> adapted = run(3), fixed = run(0);
+  for (int i = 1; i < 10; ++i) EXPECT_EQ(adapted[size_t(i)], "ok") << i;
+  for (int i = 10; i < 13; ++i) EXPECT_EQ(adapted[size_t(i)], "gap") << i;
+  for (int i = 13; i < 18; ++i) EXPECT_EQ(adapted[size_t(i)], "ok") << i;
+  for (int i = 10; i < 18; ++i) EXPECT_EQ(fixed[size_t(i)], "gap") << i;
+}
+
 TEST(Slam, OnARepeatedFloorAJumpUnlikeTheRobotsSpeedIsBelievedOnlyWhereTheMatchesChooseIt) {
   // The same hidden 7 cm jump on 4 cm tiles: every tile's copy of a feature also matches, so well under 80% of
   // the matches agree with any one fit (here about a third) and the speed check refuses it. Seven steps and

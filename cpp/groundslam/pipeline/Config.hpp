@@ -192,6 +192,10 @@ struct OdometryChecks {
   /// timestamps: the frame says `gap`, not `ok` (the mount rocked over the gap, and one pair of views does not
   /// show how far). 0: off.
   double gap_min_steps = 2.0;
+  /// Frames dropped without a trace leave one long motion; this many in a row, each spanning a gap, say the robot's
+  /// step changed (it sped up, or the steps it was learnt from were wrong): their motions become the usual steps.
+  /// 0: never.
+  int speed_change_frames = 3;
   /// A fit refused for a rival transform (max_ambiguity) or for a motion unlike the robot's (a repeated floor:
   /// the true motion and its repetitions explain the matches alike) is decided by the robot's own motion
   /// (core/MotionPrior.hpp). Its usual step (the mean of the last good ones since the last sharp turn) once,
@@ -448,6 +452,7 @@ void visitConfigFields(Config_& c, Visitor&& v) {
   v("odometry", "ok_within_deg", c.odometry_checks.ok_within_deg, kPositive);
   v("odometry", "ok_sigmas", c.odometry_checks.ok_sigmas, kNonNegative);
   v("odometry", "gap_min_steps", c.odometry_checks.gap_min_steps, kNonNegative);
+  v("odometry", "speed_change_frames", c.odometry_checks.speed_change_frames, Range{0, 1000});
   v("odometry", "repetition_max_steps", c.odometry_checks.repetition_max_steps, Range{0, 1000});
   v("odometry", "repetition_turn_deg", c.odometry_checks.repetition_turn_deg, kNonNegative);
   v("odometry", "repetition_step_turn_deg", c.odometry_checks.repetition_step_turn_deg, kNonNegative);

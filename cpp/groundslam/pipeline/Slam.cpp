@@ -148,17 +148,32 @@ FrameResult Slam::process(PreparedFrame prepared) {
         // Over a gap the robot's step is the motion shared among the steps, and a step takes as long as before.
         const Pose2& T = odometry.T_prev_curr;
         last_good_odometry_->T_prev_curr = Pose2(T.x / steps, T.y / steps, T.theta / steps);
+        long_steps_.push_back(T);
       } else {
         last_good_odometry_seconds_ = current.timestamp - previous_->timestamp;
+        long_steps_.clear();
       }
       // A turn on the spot may change the direction of the robot's steps as its camera sees them.
       if (sharpTurn(odometry.T_prev_curr)) before_turn_ = std::make_pair(usualStep(), odometry.T_prev_curr.theta);
-      recent_steps_.push_back(last_good_odometry_->T_prev_curr);
-      if (recent_steps_.size() > kRecentSteps) recent_steps_.pop_front();
+      const int speed_change_frames = config_.odometry_checks.speed_change_frames;
+      if (speed_change_frames > 0 && long_steps_.size() >= static_cast<size_t>(speed_change_frames)) {
+        // Not in the paper: frames dropped without a trace leave one long motion, not several in a row. These say the
+        // usual step is what changed: the robot sped up, or the steps it was learnt from were wrong (on a faint floor
+        // a few early fits of 2-3 mm had every later 1 cm step taken for a gap of 3-4 steps, shared out again as 2.7
+        // mm, for the rest of the run). Their motions are the robot's steps from now on.
+        recent_steps_.assign(long_steps_.begin(), long_steps_.end());
+        last_good_odometry_->T_prev_curr = odometry.T_prev_curr;
+        last_good_odometry_seconds_ = current.timestamp - previous_->timestamp;
+        long_steps_.clear();
+      } else {
+        recent_steps_.push_back(last_good_odometry_->T_prev_curr);
+        if (recent_steps_.size() > kRecentSteps) recent_steps_.pop_front();
+      }
       steps_since_turn_ = sharpTurn(odometry.T_prev_curr) ? 0 : steps_since_turn_ + 1;
     } else {
       // The speed is unknown again (a low-overlap motion usually spans a gap): the next motion is not judged by it.
       last_good_odometry_seconds_ = 0.0;
+      long_steps_.clear();
     }
     // Only at the run's first loss (and the frames right after it that fail too: a covered lens): a floor that
     // keeps losing the robot makes no map by starting again.

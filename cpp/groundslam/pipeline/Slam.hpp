@@ -550,6 +550,9 @@ class Slam {
   std::optional<PendingBridge> pending_search_;
   std::deque<int> recent_inliers_;  ///< the last 2 kRecentSteps frames' inliers (those with a fit)
   std::deque<Pose2> recent_steps_;  ///< the last kRecentSteps good motions, a gap's shared among its steps
+  /// Good motions in a row that each spanned a gap (their whole length); odometry.speed_change_frames of them
+  /// replace recent_steps_: the usual step changed.
+  std::deque<Pose2> long_steps_;
   size_t steps_since_turn_ = 0;     ///< good motions since the last sharp turn (recent_steps_ before it point elsewhere)
   std::optional<std::pair<Pose2, double>> before_turn_;  ///< the usual step before the last sharp turn, and its turn
   std::vector<double> timestamps_;
