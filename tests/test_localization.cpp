@@ -375,7 +375,7 @@ TEST(Relocalization, AWeakBridgeIsBelievedWhereItAgreesWithTheLostSegment) {
   settings.ground_seed.reset();
   const sim::SequenceSimulator simulator(settings);
   const cv::Mat blank(simulator.renderFrame(0).size(), CV_8U, cv::Scalar(128));
-  const auto run = [&](int min_inliers, double agreement_m, std::vector<FrameStatus>& status) {
+  const auto run = [&](int min_inliers, double agreement_m, double agreement_deg, std::vector<FrameStatus>& status) {
     Config config = configFor(settings);
     config.loop_closure.min_inliers = 100000;
     config.odometry_checks.align_images = false;
@@ -385,15 +385,18 @@ TEST(Relocalization, AWeakBridgeIsBelievedWhereItAgreesWithTheLostSegment) {
     config.loop_closure.lost_reach_m = 0.0;
     config.odometry_checks.bridge_corroborated_min_inliers = min_inliers;
     config.odometry_checks.bridge_corroboration_m = agreement_m;
+    config.odometry_checks.bridge_corroboration_deg = agreement_deg;
     Slam slam(config, shippedVocabulary());
     for (int i = 0; i < 130; ++i) status.push_back(slam.process(i == 120 ? blank : simulator.renderFrame(i), i).status);
     slam.finish();
     return slam.trajectory();
   };
-  std::vector<FrameStatus> corroborated, off, disagreeing;
-  const Trajectory estimated = run(8, 0.003, corroborated);
-  run(0, 0.003, off);
-  run(8, 1e-6, disagreeing);
+  std::vector<FrameStatus> corroborated, off, disagreeing, turned, too_weak;
+  const Trajectory estimated = run(8, 0.003, 0.6, corroborated);
+  run(0, 0.003, 0.6, off);
+  run(8, 1e-6, 0.6, disagreeing);
+  run(8, 0.003, 1e-6, turned);
+  run(100000, 0.003, 0.6, too_weak);  // more inliers asked than the fit has
   EXPECT_EQ(corroborated[120], FrameStatus::lost);
   EXPECT_EQ(corroborated[121], FrameStatus::relocalized);
   for (int i = 122; i < 130; ++i) EXPECT_EQ(corroborated[size_t(i)], FrameStatus::ok) << i;
@@ -404,6 +407,8 @@ TEST(Relocalization, AWeakBridgeIsBelievedWhereItAgreesWithTheLostSegment) {
   for (int i = 121; i < 130; ++i) {
     EXPECT_EQ(off[size_t(i)], FrameStatus::lost) << i;
     EXPECT_EQ(disagreeing[size_t(i)], FrameStatus::lost) << i;
+    EXPECT_EQ(turned[size_t(i)], FrameStatus::lost) << i;
+    EXPECT_EQ(too_weak[size_t(i)], FrameStatus::lost) << i;
   }
 }
 

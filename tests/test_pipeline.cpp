@@ -245,6 +245,12 @@ TEST(Slam, SeveralLongStepsInARowAreTheRobotsNewSpeed) {
   for (int i = 10; i < 13; ++i) EXPECT_EQ(adapted[size_t(i)], "gap") << i;
   for (int i = 13; i < 18; ++i) EXPECT_EQ(adapted[size_t(i)], "ok") << i;
   for (int i = 10; i < 18; ++i) EXPECT_EQ(fixed[size_t(i)], "gap") << i;
+  // The same frames with their true timestamps: frames were dropped, the robot did not speed up. Every one says gap,
+  // and the next frame one interval later is an ordinary 1 cm step again.
+  Slam timed(configFor(settings), nullptr);
+  for (int i = 0; i < 10; ++i) timed.process(simulator.renderFrame(i), i);
+  for (int k = 1; k <= 8; ++k) EXPECT_EQ(timed.process(simulator.renderFrame(9 + 3 * k), 9.0 + 3 * k).statusName(), "gap") << k;
+  EXPECT_EQ(timed.process(simulator.renderFrame(34), 34.0).statusName(), "ok");
 }
 
 TEST(Slam, OnARepeatedFloorAJumpUnlikeTheRobotsSpeedIsBelievedOnlyWhereTheMatchesChooseIt) {

@@ -193,8 +193,8 @@ struct OdometryChecks {
   /// show how far). 0: off.
   double gap_min_steps = 2.0;
   /// Frames dropped without a trace leave one long motion; this many in a row, each spanning a gap, say the robot's
-  /// step changed (it sped up, or the steps it was learnt from were wrong): their motions become the usual steps.
-  /// 0: never.
+  /// step changed (it sped up, or the steps it was learnt from were wrong): their motions become the usual steps. Gaps
+  /// the timestamps show do not count. 0: never; 1 would take every gap for a new speed.
   int speed_change_frames = 3;
   /// A fit refused for a rival transform (max_ambiguity) or for a motion unlike the robot's (a repeated floor:
   /// the true motion and its repetitions explain the matches alike) is decided by the robot's own motion
@@ -230,9 +230,9 @@ struct OdometryChecks {
   int bridge_max_frames = 3;
   /// Where every other bridge fails (tried last: they measure the motion better), a bridging frame's features with
   /// fewer inliers than a loop closure needs, but at least this many, are believed
-  /// when their motion agrees with what the lost segment says since the last tracked frame (the loss frame's own fit,
-  /// too weak to keep tracking, then the segment's odometry) within bridge_corroboration_m and _deg: two fits through
-  /// different image pairs that agree. 0: off.
+  /// when their motion agrees with what the lost segment says since the last tracked frame (the loss frame placed by
+  /// the robot's last good motion, then the segment's odometry through other images) within bridge_corroboration_m
+  /// and _deg. 0: off (a fit needs 3 inliers whatever is set).
   int bridge_corroborated_min_inliers = 8;
   double bridge_corroboration_m = 0.003;    ///< the two agree within this,
   double bridge_corroboration_deg = 0.6;    ///< and this

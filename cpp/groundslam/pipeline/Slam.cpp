@@ -144,24 +144,29 @@ FrameResult Slam::process(PreparedFrame prepared) {
     rocking_steps_[static_cast<size_t>(frame)] = spansGap(steps) ? steps : 1.0;
     if (!odometry.fallback && !odometry.low_overlap) {
       last_good_odometry_ = odometry;
+      const int speed_change_frames = config_.odometry_checks.speed_change_frames;
       if (spansGap(steps)) {
         // Over a gap the robot's step is the motion shared among the steps, and a step takes as long as before.
         const Pose2& T = odometry.T_prev_curr;
         last_good_odometry_->T_prev_curr = Pose2(T.x / steps, T.y / steps, T.theta / steps);
-        long_steps_.push_back(T);
+        // A gap the timestamps show is explained by them: only one told by the motion's length may be a new speed.
+        const bool timed_gap = last_good_odometry_seconds_ > 0.0 &&
+                               spansGap((current.timestamp - previous_->timestamp) / last_good_odometry_seconds_);
+        if (timed_gap) long_steps_.clear();
+        else if (speed_change_frames > 0) long_steps_.push_back(T);
       } else {
         last_good_odometry_seconds_ = current.timestamp - previous_->timestamp;
         long_steps_.clear();
       }
       // A turn on the spot may change the direction of the robot's steps as its camera sees them.
       if (sharpTurn(odometry.T_prev_curr)) before_turn_ = std::make_pair(usualStep(), odometry.T_prev_curr.theta);
-      const int speed_change_frames = config_.odometry_checks.speed_change_frames;
       if (speed_change_frames > 0 && long_steps_.size() >= static_cast<size_t>(speed_change_frames)) {
         // Not in the paper: frames dropped without a trace leave one long motion, not several in a row. These say the
         // usual step is what changed: the robot sped up, or the steps it was learnt from were wrong (on a faint floor
         // a few early fits of 2-3 mm had every later 1 cm step taken for a gap of 3-4 steps, shared out again as 2.7
-        // mm, for the rest of the run). Their motions are the robot's steps from now on.
-        recent_steps_.assign(long_steps_.begin(), long_steps_.end());
+        // mm, for the rest of the run). Their motions are the robot's steps from now on (the last kRecentSteps).
+        const size_t kept = std::min(long_steps_.size(), kRecentSteps);
+        recent_steps_.assign(long_steps_.end() - static_cast<std::ptrdiff_t>(kept), long_steps_.end());
         last_good_odometry_->T_prev_curr = odometry.T_prev_curr;
         last_good_odometry_seconds_ = current.timestamp - previous_->timestamp;
         long_steps_.clear();

@@ -182,7 +182,8 @@ class Slam {
   /// Right after tracking was lost (within odometry.bridge_max_frames frames): the current frame measured against
   /// the last tracked one joins the segment to the map, as a relocalization would (the map may not reach where the
   /// robot goes, and weak floors give global localization too little); when that frame is of a lost segment, the
-  /// new segment continues that one instead. By its features first, else by its image.
+  /// new segment continues that one instead. By its features first, else by its image, else by searching the motions
+  /// the robot can have made, else by a weak feature fit that agrees with the lost segment's own estimate.
   void bridgeLoss(const Keyframe& current, const PreparedFrame& prepared, FrameResult& result);
   /// A motion from the last tracked frame to the current one, and its covariance.
   struct Bridge {
@@ -539,8 +540,8 @@ class Slam {
   /// Every odometry.floor_repeat_check_frames frames of the session: the image's repetition strength, until the
   /// floor repeats.
   void noteRepetition(int session_frame, const cv::Mat& turn_image);
-  /// Tracking was lost for too little evidence or for the robot's speed on a floor that does not repeat: bridgeLoss
-  /// may join it.
+  /// Tracking was lost in a way bridgeableLoss allows (too little evidence, the robot's speed, a weak floor's rival) on a
+  /// floor that does not repeat: bridgeLoss may join it.
   bool bridgeable_loss_ = false;
   /// A searched bridge waiting for a later frame's to agree with it (confirmedSearch).
   struct PendingBridge {

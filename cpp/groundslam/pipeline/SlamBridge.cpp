@@ -1,5 +1,5 @@
-// Right after tracking is lost for too little evidence or for the robot's speed, the next frames are measured against
-// the last tracked one.
+// Right after tracking is lost (for too little evidence, for the robot's speed, or for a weak floor's rival), the next
+// frames are measured against the last tracked one.
 #include <algorithm>
 #include <cmath>
 #include <optional>
@@ -18,17 +18,17 @@ bool bridgeableLoss(FitStatus failed, bool fits_show_repetition, bool images_sho
   // A motion refused for its speed alone: frames dropped without a trace. Where the images show the floor repeating,
   // the gap's unknown length lets a bridge land one repetition short as readily as right.
   if (failed == FitStatus::implausible_motion) return !images_show_repetition;
-  // A fit refused for a rival where neither the fits nor the images show a repetition: the rival had fewer inliers
-  // than a fit needs, a weak floor's chance agreement.
+  // A fit refused as ambiguous where neither the fits nor the images show a repetition: for a rival, that rival had
+  // fewer inliers than a fit needs (a weak floor's chance agreement); across a gap where few of its matches agree
+  // (Slam::fewAgreeAcrossAGap), it is treated as a motion refused for its speed.
   if (failed == FitStatus::ambiguous) return !images_show_repetition;
   return tooLittleEvidence(failed) || failed == FitStatus::still;
 }
 
 void Slam::bridgeLoss(const Keyframe& current, const PreparedFrame& prepared, FrameResult& result) {
   const int frames_since = current.index - tracked_frame_;
-  // Only a loss for too little evidence (one blurred or covered image, a patch of smooth floor) or for the robot's
-  // speed (frames dropped without a trace), on a floor that does not repeat: there a motion spanning the lost frames
-  // matches one repetition over as readily as the right one.
+  // Only a loss bridgeableLoss allows (too little evidence, the robot's speed, a weak floor's rival), on a floor that
+  // does not repeat: there a motion spanning the lost frames matches one repetition over as readily as the right one.
   if (!bridgeable_loss_ || repeatedFloor(current.index) || !tracked_keyframe_ || tracked_frame_ >= lost_since_ || frames_since < 1 ||
       frames_since > config_.odometry_checks.bridge_max_frames) {
     return;
@@ -89,9 +89,10 @@ std::optional<Slam::Bridge> Slam::bridgeByFeatures(const Keyframe& current) cons
 
 std::optional<Slam::Bridge> Slam::corroboratedBridge(const Keyframe& current) const {
   // The last resort: too few inliers to be believed alone, as on a weak floor where one blurred or turning image lost
-  // the robot. The lost segment's own estimate since the last tracked frame went through other images (the loss
-  // frame's weak fit, then the segment's odometry): a look-alike fit rarely lands within millimetres of it, the true
-  // motion does. Tried after the other bridges, which measure the motion better where they succeed.
+  // the robot. The lost segment's own estimate since the last tracked frame came another way: the loss frame placed
+  // by the robot's last good motion (and a turn the images' spectra measured), then the segment's odometry through
+  // other images. A look-alike fit rarely lands within millimetres of it, the true motion does. Tried after the other
+  // bridges, which measure the motion better where they succeed.
   const OdometryChecks& checks = config_.odometry_checks;
   if (checks.bridge_corroborated_min_inliers <= 0) return std::nullopt;
   const Keyframe& tracked = *tracked_keyframe_;
