@@ -465,7 +465,9 @@ TEST(ImageAlignment, OutdoorsOnABrickFloorAFitWhoseCovarianceAllowsMoreThanTheTo
   EXPECT_EQ(ok_off_with, 0);
   EXPECT_EQ(uncertain_off, ok_off_without);  // every one of them, and
   EXPECT_GE(ok_with, 4);                     // not every frame
-  EXPECT_LE(uncertain, 35);
+  // 36 since odometry.speed_change_frames (30 without it): frames that said `gap` for a usual step learnt wrong
+  // are judged by their covariance now.
+  EXPECT_LE(uncertain, 40);
 }
 
 TEST(ImageAlignment, OnASmoothFloorTheImagesAreAlignedWhereTheFeaturesFail) {

@@ -329,7 +329,7 @@ void Slam::startSegment(const OdometryEdge& failed) {
   // The relocalization edge, not this one, will decide where the new segment lies.
   const int to = addUnmeasuredMotion(failed);
   // The bridge believes only what a loop closure would, over the time between the two frames.
-  bridgeable_loss_ = bridgeableLoss(failed.fit_status, repeatedFloor(to), floor_looks_repeated_);
+  bridgeable_loss_ = bridgeableLoss(failed.fit_status, repetitionShown(to), floor_looks_repeated_);
   loop_closer_->trackingLost(graph_.poses());
   pending_search_.reset();
   ever_lost_ = true;
@@ -580,10 +580,12 @@ OdometryEdge Slam::estimateOdometry(const Keyframe& previous, const Keyframe& cu
   // Not in the paper: on a floor that repeats (this fit or one of the last kRepeatedFloorFrames had a rival), a
   // motion unlike the robot's steps, or one a rival repetition is nearer to, is judged by them below: after a
   // gap two frames long the matches say the robot stepped back by a tile minus three steps, without a rival.
-  // A rival shows a repetition only with the inliers a fit needs: a weak floor's failed fit of 5-11 inliers has
-  // rivals of 2-11 by chance (measured outdoors on sand and concrete photos), tiles' rivals have 26-43.
+  if (!fit.rivals.empty()) last_rival_frame_ = current.index;
+  // For bridges and the loop closer, a rival shows a repetition only with the inliers a fit needs: a weak floor's
+  // failed fit of 5-11 inliers has rivals of 2-11 by chance (measured outdoors on sand and concrete photos), tiles'
+  // rivals have 26-43. Odometry's own caution above stays with any rival.
   if (showsARepetition(fit, odometry_fitting_.min_inliers)) {
-    last_rival_frame_ = current.index;
+    last_repetition_frame_ = current.index;
     if (loop_closer_) loop_closer_->floorRepeats();  // without loop closure there is no global localization to tell
   }
   const bool repeated_floor = repeatedFloor(current.index);

@@ -58,8 +58,8 @@ struct OdometryEdge {
 /// Whether a loss for `failed` may be bridged to the last tracked frame (Slam::bridgeLoss): a loss for too little
 /// evidence, for the robot's speed or for a fit that left everything in place, on a floor whose fits show no rival
 /// repetition (showsARepetition); for the speed not where the images show the floor repeating either (a gap of
-/// unknown length lands one repetition short as readily as right); for a rival only where neither shows one (then
-/// the rival had fewer inliers than a fit needs: a weak floor, not a repetition).
+/// unknown length lands one repetition short as readily as right); as ambiguous only where neither shows one (then a
+/// rival had fewer inliers than a fit needs, a weak floor, not a repetition; or few matches agreed across a gap).
 bool bridgeableLoss(FitStatus failed, bool fits_show_repetition, bool images_show_repetition);
 
 class Slam {
@@ -533,6 +533,11 @@ class Slam {
   int last_rival_frame_ = -1;  ///< the last frame whose odometry fit had a rival
   /// The floor repeats: one of the last kRepeatedFloorFrames odometry fits up to `frame` had a rival repetition.
   bool repeatedFloor(int frame) const { return last_rival_frame_ >= 0 && frame - last_rival_frame_ <= kRepeatedFloorFrames; }
+  int last_repetition_frame_ = -1;  ///< the last frame whose odometry fit had a rival with a fit's inliers
+  /// For bridges: one of the last kRepeatedFloorFrames fits up to `frame` had a rival that showsARepetition.
+  bool repetitionShown(int frame) const {
+    return last_repetition_frame_ >= 0 && frame - last_repetition_frame_ <= kRepeatedFloorFrames;
+  }
   /// The images say the floor repeats (odometry.floor_repeat_*), for the rest of the run: a loss there for a motion
   /// unlike the robot's is not bridged (startSegment).
   bool floor_looks_repeated_ = false;

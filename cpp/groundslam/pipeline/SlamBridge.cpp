@@ -29,7 +29,7 @@ void Slam::bridgeLoss(const Keyframe& current, const PreparedFrame& prepared, Fr
   const int frames_since = current.index - tracked_frame_;
   // Only a loss bridgeableLoss allows (too little evidence, the robot's speed, a weak floor's rival), on a floor that
   // does not repeat: there a motion spanning the lost frames matches one repetition over as readily as the right one.
-  if (!bridgeable_loss_ || repeatedFloor(current.index) || !tracked_keyframe_ || tracked_frame_ >= lost_since_ || frames_since < 1 ||
+  if (!bridgeable_loss_ || repetitionShown(current.index) || !tracked_keyframe_ || tracked_frame_ >= lost_since_ || frames_since < 1 ||
       frames_since > config_.odometry_checks.bridge_max_frames) {
     return;
   }
