@@ -12,6 +12,15 @@
 #include "groundslam/pipeline/StageTimer.hpp"
 
 namespace groundslam {
+namespace {
+
+/// `measured` lies within `max_m` and `max_deg` of `expected` (both from the same frame).
+bool agreesWithin(const Pose2& expected, const Pose2& measured, double max_m, double max_deg) {
+  const Pose2 disagreement = expected.inverse() * measured;
+  return disagreement.translation().norm() <= max_m && std::abs(disagreement.theta) <= max_deg * M_PI / 180.0;
+}
+
+}  // namespace
 
 bool bridgeableLoss(FitStatus failed, bool fits_show_repetition, bool images_show_repetition) {
   if (fits_show_repetition) return false;
@@ -106,9 +115,7 @@ std::optional<Slam::Bridge> Slam::corroboratedBridge(const Keyframe& current) co
   }
   const std::vector<Pose2>& poses = graph_.poses();
   const Pose2 by_segment = between(poses[static_cast<size_t>(tracked_frame_)], poses[static_cast<size_t>(current.index)]);
-  const Pose2 disagreement = by_segment.inverse() * fit.T_target_source;
-  if (disagreement.translation().norm() > checks.bridge_corroboration_m ||
-      std::abs(disagreement.theta) > checks.bridge_corroboration_deg * M_PI / 180.0) {
+  if (!agreesWithin(by_segment, fit.T_target_source, checks.bridge_corroboration_m, checks.bridge_corroboration_deg)) {
     return std::nullopt;
   }
   return Bridge{fit.T_target_source, fit.covariance};
@@ -171,10 +178,8 @@ std::optional<Slam::Bridge> Slam::confirmedSearch(const Keyframe& current, const
   const std::vector<Pose2>& poses = graph_.poses();
   const Pose2 carried = earlier->bridge.T_tracked_current *
                         between(poses[static_cast<size_t>(earlier->frame)], poses[static_cast<size_t>(current.index)]);
-  const Pose2 disagreement = carried.inverse() * found->T_tracked_current;
   const OdometryChecks& checks = config_.odometry_checks;
-  if (disagreement.translation().norm() > checks.bridge_search_agreement_m ||
-      std::abs(disagreement.theta) > checks.bridge_search_agreement_deg * M_PI / 180.0) {
+  if (!agreesWithin(carried, found->T_tracked_current, checks.bridge_search_agreement_m, checks.bridge_search_agreement_deg)) {
     return std::nullopt;
   }
   // Both edges join the segment. They share the tracked frame's keypoints, a mild correlation; measured, the pair
