@@ -103,14 +103,27 @@ std::optional<double> overlapCorrelation(const cv::Mat& a, const cv::Mat& b, cv:
   return norms > 0.0 ? x.dot(y) / norms : 0.0;
 }
 
+/// `image` less its slow changes: what is left is the ground's grain. The cut is spectralTurn's lowest frequency: the
+/// blur's response falls to a half there, exp(-2 pi^2 sigma^2 f^2) = 1/2.
+cv::Mat grainOf(const cv::Mat& image) {
+  const double sigma_px = std::sqrt(std::log(2.0) / 2.0) / (M_PI * SpectralTurnSettings{}.min_frequency);
+  cv::Mat slow;
+  cv::GaussianBlur(image, slow, cv::Size(), sigma_px);
+  return image - slow;
+}
+
 /// The phase correlation finds a shift only modulo the size it transforms (the square's side, padded to a size the DFT
 /// handles fast): a shift past half of it (images overlapping by less than half, frames dropped) is reported as its
-/// alias the other way. Of the shift and its aliases, the one whose overlap correlates best.
-cv::Point2d unaliasedShift(const cv::Mat& a, const cv::Mat& b, cv::Point2d shift) {
+/// alias the other way. Of the shift and its aliases, the one whose overlap correlates best in the ground's grain: in
+/// brightness, a shadow that turned with the robot can make the wrong overlap correlate better (measured on a carpet
+/// after a quarter turn with frames dropped: 0.245 at the alias against 0.228 at the truth; in the grain 0.01
+/// against 0.20).
+cv::Point2d unaliasedShift(const cv::Mat& a_image, const cv::Mat& b_image, cv::Point2d shift) {
   const auto aliases = [](double s, int side) {
     const int period = cv::getOptimalDFTSize(side);
     return std::array<double, 2>{s, s > 0.0 ? s - period : s + period};
   };
+  const cv::Mat a = grainOf(a_image), b = grainOf(b_image);
   cv::Point2d best = shift;
   double best_correlation = -std::numeric_limits<double>::infinity();
   for (const double x : aliases(shift.x, a.cols)) {
