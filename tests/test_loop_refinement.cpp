@@ -104,3 +104,35 @@ TEST(LoopRefinement, AnEdgeMeasuredAgainMovesTheOptimisedPoses) {
   EXPECT_NEAR(graph.poses()[1].theta, again.theta, 1e-9);
   EXPECT_EQ(graph.edges()[0].information(0, 0), 4.0);
 }
+
+TEST(LoopRefinement, AtTheEndTheFinalMountsChangeALoopOnlyByWhatTheyTurn) {
+  // Where a loop's points did not track, its keypoints' guided pairs are kept; their own fit is not the loop's
+  // transform and can lie a degree from it. At the end the edge takes only what the final mounts change in the pairs'
+  // fit. Tilts off by tenths of a degree turn a transform by hundredths.
+  const sim::SimulationSettings s = rockingRandomWalk();
+  const sim::SequenceSimulator simulator(s);
+  Config config;
+  config.camera = cameraConfigOf(s.camera, s.mounting_height_m);
+  Slam slam(config, std::make_shared<const Vocabulary>(readVocabulary(std::string(GROUNDSLAM_SOURCE_DIR) + "/config/vocabulary/ground.gslmvoc")));
+  for (int i = 0; i < simulator.frameCount(); ++i) slam.process(simulator.renderFrame(i), i);
+  std::vector<GraphEdge> before = slam.graph().edges();
+  slam.finish();
+  const std::vector<GraphEdge>& after = slam.graph().edges();
+  ASSERT_EQ(before.size(), after.size());
+  int loops = 0, changed = 0;
+  double most_turned = 0.0, most_moved = 0.0;
+  for (size_t e = 0; e < after.size(); ++e) {
+    if (!after[e].loop) continue;
+    const Pose2 change = before[e].T_from_to.inverse() * after[e].T_from_to;
+    ++loops;
+    changed += change.translation().norm() > 1e-6 || std::abs(change.theta) > 1e-6 ? 1 : 0;
+    most_turned = std::max(most_turned, std::abs(change.theta));
+    most_moved = std::max(most_moved, change.translation().norm());
+  }
+  // Measured: 37 loops, every one changed; at most 0.10 degrees and 0.15 mm. Refitted as a whole, the guided pairs
+  // of one loop turned it by 1.0 degree and 1.2 mm.
+  EXPECT_GT(loops, 20);
+  EXPECT_GE(changed, loops / 2);
+  EXPECT_LT(most_turned, 0.25 * kDeg);
+  EXPECT_LT(most_moved, 0.0005);
+}

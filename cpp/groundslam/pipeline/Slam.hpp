@@ -377,8 +377,9 @@ class Slam {
   /// (mountCovariance); empty when the fit fails.
   std::optional<RigidEstimate> fitLoopRays(const LoopRays& pairs, const MountState& a_mount, const MountState& b_mount,
                                            const Pose2& T_guess) const;
-  /// At the end, once the mounts are smoothed: every loop fitted again through its frames' final mounts
-  /// (loop_closure.remeasure_at_end); true when an edge changed (finish() then optimises the graph again).
+  /// At the end, once the mounts are smoothed: every loop's edge turned and shifted by what its pairs' fit changes
+  /// from the mounts used to its frames' final mounts (loop_closure.remeasure_at_end); true when an edge changed
+  /// (finish() then optimises the graph again).
   bool remeasureLoops();
   /// Rays (normalised image coordinates) projected to the ground through the given mount.
   GroundFeatures projectRays(const std::vector<Eigen::Vector2d>& rays, const MountState& mount) const;
