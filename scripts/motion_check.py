@@ -4,7 +4,9 @@
 Usage: scripts/motion_check.py RUN_DIR SEQUENCE_DIR [--json]
 Prints: frames whose status is ok but whose odometry motion is off by more than 5 mm or 0.5 degrees
 (silent wrong motions), the same count among the frames flagged as less certain (low_overlap, sharp_turn,
-gap, aligned, unconfirmed, uncertain), and the RMS error of the estimated roll, pitch and height (mount.csv).
+gap, aligned, unconfirmed, uncertain), the RMS error of the estimated roll, pitch and height (mount.csv), and the
+graph's edges between frames that are not consecutive (bridges over a loss, loop closures, as graph.g2o holds them
+after the run) that are off by more than a wrong loop closure is: 2 cm or 2 degrees.
 """
 import csv
 import json
@@ -34,6 +36,27 @@ def motion_error(row, gt):
     theta = math.radians(float(row['odometry_theta_deg']))
     dm = math.hypot(float(row['odometry_x_m']) - gt[0], float(row['odometry_y_m']) - gt[1])
     return dm, abs(math.degrees(math.atan2(math.sin(theta - gt[2]), math.cos(theta - gt[2]))))
+
+
+def wrong_graph_edges(run, truth):
+    """graph.g2o's edges between frames that are not consecutive, and how many are off by > 2 cm or 2 degrees."""
+    checked, wrong = 0, 0
+    path = run + '/graph.g2o'
+    if not os.path.exists(path):
+        return checked, wrong
+    for line in open(path):
+        f = line.split()
+        if not f or f[0] != 'EDGE_SE2':
+            continue
+        i, j = int(f[1]), int(f[2])
+        if abs(j - i) == 1 or i not in truth or j not in truth:
+            continue
+        gt = between(truth[i], truth[j])
+        x, y, theta = map(float, f[3:6])
+        checked += 1
+        off_deg = abs(math.degrees(math.atan2(math.sin(theta - gt[2]), math.cos(theta - gt[2]))))
+        wrong += 1 if math.hypot(x - gt[0], y - gt[1]) > 0.02 or off_deg > 2.0 else 0
+    return checked, wrong
 
 
 def main():
@@ -67,6 +90,7 @@ def main():
             tilt_err += [float(row['roll_deg']) - float(m['roll_deg']), float(row['pitch_deg']) - float(m['pitch_deg'])]
             tilt_level += [float(m['roll_deg']), float(m['pitch_deg'])]
             height_err.append(float(row['height_m']) - float(m['height_m']))
+    edges_checked, edges_wrong = wrong_graph_edges(run, truth)
     rms = lambda v: math.sqrt(sum(x * x for x in v) / len(v)) if v else float('nan')
     result = {'ok_frames': ok, 'silent_wrong_motions': wrong, 'worst_ok_error_mm': 1000 * worst_m,
               'worst_ok_error_deg': worst_deg, 'low_overlap_frames': low, 'low_overlap_off': low_wrong,
@@ -77,7 +101,8 @@ def main():
               'uncertain_frames': flagged['uncertain'][0], 'uncertain_off': flagged['uncertain'][1],
               'mount_estimated_frames': len(height_err),
               'tilt_rms_error_deg': rms(tilt_err), 'tilt_rms_true_deg': rms(tilt_level),
-              'height_rms_error_mm': 1000 * rms(height_err)}
+              'height_rms_error_mm': 1000 * rms(height_err),
+              'graph_edges_checked': edges_checked, 'wrong_graph_edges': edges_wrong}
     if '--json' in sys.argv:
         print(json.dumps(result))
     else:
