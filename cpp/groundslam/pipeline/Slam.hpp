@@ -123,8 +123,9 @@ class Slam {
   /// robot's usual steps and from several times as many (odometry.align_*; an alignment with a rival is not believed),
   /// or nothing (pipeline/SlamAlignment.cpp).
   std::optional<OdometryEdge> odometryByAlignment(const Keyframe& previous, const Keyframe& current, const AlignmentImage& alignment) const;
-  /// False when an aligned motion leaves the robot nearly where it was without a sharp turn (odometry.align_min_step_share).
-  bool movedTheRobot(const Pose2& T_prev_curr) const;
+  /// False when an aligned motion over `steps` frames leaves the robot nearly where it was without a sharp turn
+  /// (odometry.align_min_step_share of the usual step, per frame).
+  bool movedTheRobot(const Pose2& T_prev_curr, int steps = 1) const;
   /// A fit that leaves every match in place, or an alignment every keypoint, while the images' spectra show the
   /// ground moving (odometry.rest_check_by_spectra): the motion the images measure from there (`aligned`), else a fallback
   /// (FitStatus::still) assuming the spectra's motion. None when rest stands.

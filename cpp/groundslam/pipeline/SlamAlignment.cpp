@@ -232,13 +232,14 @@ bool Slam::withTheSpectra(const Pose2& by_spectra, const Pose2& T_prev_curr) con
   return apart.translation().norm() <= config_.odometry_checks.align_sigma_m && std::abs(apart.theta) <= M_PI / 180.0;
 }
 
-bool Slam::movedTheRobot(const Pose2& T_prev_curr) const {
+bool Slam::movedTheRobot(const Pose2& T_prev_curr, int steps) const {
   // What stays in the image aligns best near rest (the robot's shadow and glare, a smooth floor that looks the same
   // after any small shift), turned or not: an alignment that leaves the robot nearly where it was is not believed,
-  // unless it turned sharply on the spot. Nearly: less than align_min_step_share of its usual step, or before any
-  // step was measured, less than the distance that tells a moved feature from a still one.
+  // unless it turned sharply on the spot. Nearly: less than align_min_step_share of its usual step per frame, or
+  // before any step was measured, less than the distance that tells a moved feature from a still one.
   if (sharpTurn(T_prev_curr)) return true;
-  const double least = last_good_odometry_ ? config_.odometry_checks.align_min_step_share * usualStep().translation().norm() : movedDistanceM();
+  const double least = last_good_odometry_ ? config_.odometry_checks.align_min_step_share * usualStep().translation().norm() * std::max(1, steps)
+                                           : movedDistanceM();
   return T_prev_curr.translation().norm() >= least;
 }
 
