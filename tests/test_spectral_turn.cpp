@@ -111,7 +111,7 @@ TEST(SpectralTurn, WithTheTurnKnownThePhaseCorrelationGivesTheShift) {
   const cv::Mat floor = grainyFloor(900, 1.5, 12);
   const cv::Mat previous = view(floor, {0, 0}, 0.0);
   for (const double turn_deg : {-90.0, -17.0, 0.0, 76.0}) {
-    const cv::Point2f offset(18.0f, -8.0f);
+    const cv::Point2f offset(18.0f, -41.0f);
     const cv::Mat current = view(floor, offset, turn_deg);
     const TurnAndShift found = shiftAfterTurn(previous, current, turn_deg * kDeg);
     EXPECT_GT(found.response, 0.2) << turn_deg;
@@ -132,7 +132,7 @@ TEST(SpectralTurn, AShiftPastHalfTheImageIsNotTakenForItsAliasTheOtherWay) {
   const cv::Mat floor = grainyFloor(900, 1.5, 17);
   const cv::Mat previous = view(floor, {0, 0}, 0.0);
   for (const auto& [offset, turn_deg] : {std::pair{cv::Point2f(0.0f, 150.0f), 0.0}, std::pair{cv::Point2f(-135.0f, 20.0f), 0.0},
-                                        std::pair{cv::Point2f(25.0f, -8.0f), 30.0}}) {
+                                        std::pair{cv::Point2f(25.0f, -140.0f), 30.0}}) {
     const cv::Mat current = view(floor, offset, turn_deg);
     const TurnAndShift found = shiftAfterTurn(previous, current, turn_deg * kDeg);
     for (const cv::Point2d p : {cv::Point2d(160, 120), cv::Point2d(0, 0), cv::Point2d(319, 239)}) {
