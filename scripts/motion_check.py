@@ -38,18 +38,23 @@ def motion_error(row, gt):
     return dm, abs(math.degrees(math.atan2(math.sin(theta - gt[2]), math.cos(theta - gt[2]))))
 
 
-def wrong_graph_edges(run, truth):
-    """graph.g2o's edges between frames that are not consecutive, and how many are off by > 2 cm or 2 degrees."""
+def wrong_graph_edges(run, truth, frames):
+    """graph.g2o's edges between frames that are not consecutive, and how many are off by > 2 cm or 2 degrees.
+    The graph's last vertices are frames.csv's rows in order (a prior map's keyframes come first); each is matched to
+    the truth by its timestamp. Edges without information (a prior map's anchors) are not measurements."""
     checked, wrong = 0, 0
     path = run + '/graph.g2o'
     if not os.path.exists(path):
         return checked, wrong
-    for line in open(path):
-        f = line.split()
-        if not f or f[0] != 'EDGE_SE2':
+    lines = [line.split() for line in open(path)]
+    vertices = sum(1 for f in lines if f and f[0] == 'VERTEX_SE2')
+    offset = vertices - len(frames)
+    key = lambda v: round(float(frames[v - offset]['timestamp'])) if 0 <= v - offset < len(frames) else None
+    for f in lines:
+        if not f or f[0] != 'EDGE_SE2' or not any(float(x) != 0.0 for x in f[6:12]):
             continue
-        i, j = int(f[1]), int(f[2])
-        if abs(j - i) == 1 or i not in truth or j not in truth:
+        i, j = key(int(f[1])), key(int(f[2]))
+        if abs(int(f[2]) - int(f[1])) == 1 or i not in truth or j not in truth:
             continue
         gt = between(truth[i], truth[j])
         x, y, theta = map(float, f[3:6])
@@ -90,7 +95,7 @@ def main():
             tilt_err += [float(row['roll_deg']) - float(m['roll_deg']), float(row['pitch_deg']) - float(m['pitch_deg'])]
             tilt_level += [float(m['roll_deg']), float(m['pitch_deg'])]
             height_err.append(float(row['height_m']) - float(m['height_m']))
-    edges_checked, edges_wrong = wrong_graph_edges(run, truth)
+    edges_checked, edges_wrong = wrong_graph_edges(run, truth, frames)
     rms = lambda v: math.sqrt(sum(x * x for x in v) / len(v)) if v else float('nan')
     result = {'ok_frames': ok, 'silent_wrong_motions': wrong, 'worst_ok_error_mm': 1000 * worst_m,
               'worst_ok_error_deg': worst_deg, 'low_overlap_frames': low, 'low_overlap_off': low_wrong,

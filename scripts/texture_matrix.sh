@@ -28,7 +28,7 @@ case "$condition" in
                             --spin-deg 75 --drop-frames 0.02 --drop-max 8) ;;
   *) echo "unknown CONDITION '$condition' (standard | outdoor | outdoor_heavy)" >&2; exit 2 ;;
 esac
-echo "| texture | path | frames | odometry cm/m | odometry deg | SLAM cm/m | SLAM deg | SLAM ATE mm | loops accepted | wrong | precision | recall | fallback or lost frames | wrong ok motions | low-overlap frames (off) | sharp-turn and gap frames (off) | aligned frames (off) | unconfirmed frames (off) | uncertain frames (off) | tilt error deg | wrong bridge or loop edges |"
+echo "| texture | path | frames | odometry cm/m | odometry deg | SLAM cm/m | SLAM deg | SLAM ATE mm | loops accepted | wrong | precision | recall | fallback or lost frames | wrong ok motions | low-overlap frames (off) | sharp-turn and gap frames (off) | aligned frames (off) | unconfirmed frames (off) | uncertain frames (off) | tilt error deg | wrong bridge or loop edges (of all) |"
 echo "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
 for texture in $kinds; do
   if [ -f "$texture" ]; then
@@ -66,7 +66,7 @@ unconfirmed = f"{c['unconfirmed_frames']} ({c['unconfirmed_off']})" if "unconfir
 uncertain = f"{c['uncertain_frames']} ({c['uncertain_off']})" if "uncertain_frames" in c else "n/a"
 tilt = c.get("tilt_rms_error_deg")
 tilt = f"{tilt:.2f} of {c['tilt_rms_true_deg']:.2f}" if isinstance(tilt, float) and tilt == tilt else "n/a"
-edges = c.get("wrong_graph_edges", "n/a")
+edges = f"{c['wrong_graph_edges']} of {c['graph_edges_checked']}" if "wrong_graph_edges" in c else "n/a"
 ratio = lambda v: "n/a" if v is None else f"{v:.3f}"  # null: nothing accepted (precision) or nothing true (recall)
 print(f"| {kind} | {path} | {m['paired_frames']} | {o['translation_mae_cm_per_m']:.3f} | {o['rotation_mae_deg']:.3f} | "
       f"{m['translation_mae_cm_per_m']:.3f} | {m['rotation_mae_deg']:.3f} | {1000 * m['ate_rmse_m']:.2f} | "

@@ -105,10 +105,11 @@ TEST(LoopRefinement, AnEdgeMeasuredAgainMovesTheOptimisedPoses) {
   EXPECT_EQ(graph.edges()[0].information(0, 0), 4.0);
 }
 
-TEST(LoopRefinement, AtTheEndTheFinalMountsChangeALoopOnlyByWhatTheyTurn) {
+TEST(LoopRefinement, AtTheEndALoopTakesOnlyWhatTheFinalMountsChangeInItsPairsFit) {
   // Where a loop's points did not track, its keypoints' guided pairs are kept; their own fit is not the loop's
   // transform and can lie a degree from it. At the end the edge takes only what the final mounts change in the pairs'
-  // fit. Tilts off by tenths of a degree turn a transform by hundredths.
+  // fit (its turn and its shift). Tilts off by tenths of a degree turn a transform by hundredths, and the final
+  // mounts, nearer the true ones, bring the loops nearer the truth.
   const sim::SimulationSettings s = rockingRandomWalk();
   const sim::SequenceSimulator simulator(s);
   Config config;
@@ -120,10 +121,13 @@ TEST(LoopRefinement, AtTheEndTheFinalMountsChangeALoopOnlyByWhatTheyTurn) {
   const std::vector<GraphEdge>& after = slam.graph().edges();
   ASSERT_EQ(before.size(), after.size());
   int loops = 0, changed = 0;
-  double most_turned = 0.0, most_moved = 0.0;
+  double most_turned = 0.0, most_moved = 0.0, squares_before = 0.0, squares_after = 0.0;
   for (size_t e = 0; e < after.size(); ++e) {
     if (!after[e].loop) continue;
     const Pose2 change = before[e].T_from_to.inverse() * after[e].T_from_to;
+    const Pose2 truth = between(simulator.groundTruth()[size_t(after[e].from)], simulator.groundTruth()[size_t(after[e].to)]);
+    squares_before += std::pow(wrapAngle(before[e].T_from_to.theta - truth.theta), 2);
+    squares_after += std::pow(wrapAngle(after[e].T_from_to.theta - truth.theta), 2);
     ++loops;
     changed += change.translation().norm() > 1e-6 || std::abs(change.theta) > 1e-6 ? 1 : 0;
     most_turned = std::max(most_turned, std::abs(change.theta));
@@ -135,4 +139,7 @@ TEST(LoopRefinement, AtTheEndTheFinalMountsChangeALoopOnlyByWhatTheyTurn) {
   EXPECT_GE(changed, loops / 2);
   EXPECT_LT(most_turned, 0.25 * kDeg);
   EXPECT_LT(most_moved, 0.0005);
+  // Measured: the loops' heading RMS against the truth 0.086 -> 0.063 degrees (with the change applied the wrong way
+  // round, 0.120).
+  EXPECT_LT(squares_after, squares_before);
 }

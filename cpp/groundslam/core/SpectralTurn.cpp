@@ -84,10 +84,6 @@ SpectralTurn spectralTurn(const cv::Mat& previous, const cv::Mat& current, const
   return result;
 }
 
-double phasePeakAfterTurn(const cv::Mat& previous, const cv::Mat& current, double turn_rad) {
-  return shiftAfterTurn(previous, current, turn_rad).response;
-}
-
 namespace {
 
 /// Pearson correlation of `a` and `b` where `b` shows at p what `a` shows at p - shift (whole pixels); none when they
@@ -139,9 +135,8 @@ cv::Point2d unaliasedShift(const cv::Mat& a_image, const cv::Mat& b_image, cv::P
   return best;
 }
 
-}  // namespace
-
-TurnAndShift shiftAfterTurn(const cv::Mat& previous, const cv::Mat& current, double turn_rad) {
+/// shiftAfterTurn; the shift's aliases are told apart only with `unalias` (the peak alone does not need them).
+TurnAndShift phaseCorrelationAfterTurn(const cv::Mat& previous, const cv::Mat& current, double turn_rad, bool unalias) {
   TurnAndShift result;
   if (previous.empty() || previous.size() != current.size() || previous.channels() != 1 || current.channels() != 1 ||
       std::min(previous.cols, previous.rows) < 16) {
@@ -162,7 +157,8 @@ TurnAndShift shiftAfterTurn(const cv::Mat& previous, const cv::Mat& current, dou
   cv::Mat window;
   cv::createHanningWindow(window, a.size(), CV_64F);
   double response = 0.0;
-  const cv::Point2d shift = unaliasedShift(a, turned_back, cv::phaseCorrelate(a, turned_back, window, &response));
+  const cv::Point2d peak = cv::phaseCorrelate(a, turned_back, window, &response);
+  const cv::Point2d shift = unalias ? unaliasedShift(a, turned_back, peak) : peak;
   if (!std::isfinite(response)) return result;
   // The turned-back image shows at p what the previous one shows at p - shift (both squares cut at one place).
   cv::Matx23d W;
@@ -174,6 +170,16 @@ TurnAndShift shiftAfterTurn(const cv::Mat& previous, const cv::Mat& current, dou
   result.W_previous_current = W;
   result.response = response;
   return result;
+}
+
+}  // namespace
+
+double phasePeakAfterTurn(const cv::Mat& previous, const cv::Mat& current, double turn_rad) {
+  return phaseCorrelationAfterTurn(previous, current, turn_rad, false).response;
+}
+
+TurnAndShift shiftAfterTurn(const cv::Mat& previous, const cv::Mat& current, double turn_rad) {
+  return phaseCorrelationAfterTurn(previous, current, turn_rad, true);
 }
 
 }  // namespace groundslam

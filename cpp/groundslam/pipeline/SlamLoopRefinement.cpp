@@ -206,8 +206,9 @@ bool Slam::remeasureLoops() {
     const GraphEdge& edge = graph_.edges()[pairs.edge];
     const Pose2 guess = mount_corrections_[a].inverse() * edge.T_from_to * mount_corrections_[b];
     const auto fit = fitLoopRays(pairs, final_mounts_[a], final_mounts_[b], guess);
+    if (!fit) continue;
     const RigidEstimate as_used = fitRays(pairs, used_mounts_[a], used_mounts_[b], edge.T_from_to);
-    if (!fit || !as_used.ok()) continue;
+    if (!as_used.ok()) continue;
     const Pose2 by_the_mounts = as_used.T_target_source.inverse() * mount_corrections_[a] * fit->T_target_source * mount_corrections_[b].inverse();
     graph_.remeasureEdge(pairs.edge, edge.T_from_to * by_the_mounts,
                          informationFrom(fit->covariance, config_.graph.min_sigma_m, config_.graph.min_sigma_rad));
