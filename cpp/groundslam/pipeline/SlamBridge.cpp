@@ -128,9 +128,10 @@ std::optional<Slam::Bridge> Slam::bridgeByAlignment(const Keyframe& current, con
   const auto aligned = alignFromSteps(tracked_alignment_, alignment, frames_since, false);
   if (!aligned) return std::nullopt;
   const Pose2 T_tracked_current = groundMotionOf(aligned->W_previous_current);
-  // Near rest, as odometry's alignments are judged: what stays in the image pulls an alignment there (measured on
-  // OpenArena's darker concrete outdoors: every one of 17 such bridges turned right but left the robot within 6 mm of
-  // the tracked frame, 17-84 mm off; the search and the spectra, tried next, bridged the same losses within 6 mm).
+  // Near rest, as odometry's alignments are judged: what stays in the image pulls an alignment there (measured
+  // outdoors on OpenArena's darker concrete, nki ground and fine sand: all 40 such bridges turned within 1.1 degrees of
+  // the truth but left the robot 0.3-12 mm from the tracked frame, where it had moved 20-80 mm; the search and the
+  // spectra, tried next, bridged 74 losses on the same rows within 9 mm).
   if (!plausibleMotion(T_tracked_current, tracked_time_, current.timestamp) || !movedTheRobot(T_tracked_current, frames_since)) {
     return std::nullopt;
   }
