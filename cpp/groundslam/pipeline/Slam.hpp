@@ -534,12 +534,12 @@ class Slam {
   static constexpr int kRepeatedFloorFrames = 20;
   int last_rival_frame_ = -1;  ///< the last frame whose odometry fit had a rival
   /// The floor repeats: one of the last kRepeatedFloorFrames odometry fits up to `frame` had a rival repetition.
-  bool repeatedFloor(int frame) const { return last_rival_frame_ >= 0 && frame - last_rival_frame_ <= kRepeatedFloorFrames; }
+  bool repeatedFloor(int frame) const { return withinRepeatedFloorFrames(last_rival_frame_, frame); }
   int last_repetition_frame_ = -1;  ///< the last frame whose odometry fit had a rival with a fit's inliers
   /// For bridges: one of the last kRepeatedFloorFrames fits up to `frame` had a rival that showsARepetition.
-  bool repetitionShown(int frame) const {
-    return last_repetition_frame_ >= 0 && frame - last_repetition_frame_ <= kRepeatedFloorFrames;
-  }
+  bool repetitionShown(int frame) const { return withinRepeatedFloorFrames(last_repetition_frame_, frame); }
+  /// `frame` lies at most kRepeatedFloorFrames after `last` (-1: never).
+  static bool withinRepeatedFloorFrames(int last, int frame) { return last >= 0 && frame - last <= kRepeatedFloorFrames; }
   /// The images say the floor repeats (odometry.floor_repeat_*), for the rest of the run: a loss there for a motion
   /// unlike the robot's is not bridged (startSegment).
   bool floor_looks_repeated_ = false;
