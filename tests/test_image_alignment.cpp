@@ -466,8 +466,9 @@ TEST(ImageAlignment, OutdoorsOnABrickFloorAFitWhoseCovarianceAllowsMoreThanTheTo
   EXPECT_EQ(uncertain_off, ok_off_without);  // every one of them, and
   EXPECT_GE(ok_with, 4);                     // not every frame
   // 36 since odometry.speed_change_frames (30 without it): frames that said `gap` for a usual step learnt wrong
-  // are judged by their covariance now.
-  EXPECT_LE(uncertain, 40);
+  // are judged by their covariance now; 42 since the images align from the usual steps where a weak fit is not
+  // confirmed (the motions they measure change the usual steps later frames are judged by).
+  EXPECT_LE(uncertain, 44);
 }
 
 TEST(ImageAlignment, OnASmoothFloorTheImagesAreAlignedWhereTheFeaturesFail) {
@@ -608,6 +609,7 @@ cv::Mat faintTexture(int size, double contrast, std::uint64_t seed) {
 
 struct FaintFloorRun {
   int measured = 0, measured_at_rest = 0, ok_off = 0, aligned = 0, aligned_off = 0, aligned_at_rest = 0, still = 0, still_near_truth = 0;
+  double aligned_turn_error_rad = 0.0;  ///< summed over the aligned frames
 };
 
 /// Odometry alone, outdoors (the robot's shadow, lens dirt, a lamp's glare, a bumper, a rocking mount) over a faint
@@ -634,6 +636,7 @@ FaintFloorRun runFaintFloor(bool check_rest, std::uint64_t seed, double contrast
     }
     run.ok_off += r.status == FrameStatus::ok && (off_m > 0.005 || off_rad > 0.5 * kDeg) ? 1 : 0;
     if (r.status == FrameStatus::aligned) {
+      run.aligned_turn_error_rad += r.odometry.theta - between(simulator.groundTruth()[size_t(i - 1)], simulator.groundTruth()[size_t(i)]).theta;
       ++run.aligned;
       run.aligned_off += off_m > 0.005 || off_rad > 0.5 * kDeg ? 1 : 0;
       run.aligned_at_rest += at_rest ? 1 : 0;
@@ -650,44 +653,53 @@ FaintFloorRun runFaintFloor(bool check_rest, std::uint64_t seed, double contrast
 
 TEST(ImageAlignment, OutdoorsOnAFaintFloorMatchesThatAllStayInPlaceAreRefutedByTheSpectra) {
   // A floor too faint for its own keypoints to match: the robot's shadow edge, lens dirt and bumper are all that
-  // match, and the fits put the robot at rest frame after frame while it drives 1 cm a frame; so do the images'
-  // alignments, which start from its steps, learnt at rest. The images' spectra, less the mean of the recent images,
-  // see the ground shift: such a fit or alignment is refused (`fallback_still`) and the spectra's motion assumed,
-  // unless the images aligned from it measure the motion. Measured (seeds 3 and 4), without / with the check:
-  // measured frames at rest 43 + 36 / 1 + 1 (the first frame, before there is a mean of recent images); aligned frames
-  // at rest 12 + 13 / 0; still frames 0 / 58 + 46, of them within 3 mm of the truth 52 + 40.
+  // match, and the fits put the robot at rest while it drives 1 cm a frame. The images measure most steps (the heading
+  // images see the ground where the reduced ones see the artifacts); the fits at rest they do not replace are
+  // refuted by the images' spectra, less the mean of the recent images, which see the ground shift: the images are
+  // aligned from the spectra's motion, else the motion is not known (`fallback_still`). Measured (seeds 3 and 4),
+  // without / with the check: measured frames at rest 7 + 7 / 1 + 1 (the first frame, before there is a mean of recent
+  // images); aligned frames 103 / 112, at rest 1 / 0; still frames 0 / 3, all within 3 mm of the truth. (Before the
+  // heading images measured the steps: at rest 43 + 36 / 1 + 1, still frames 0 / 104.)
   FaintFloorRun without, with;
   for (const std::uint64_t seed : {3u, 4u}) {
     const FaintFloorRun a = runFaintFloor(false, seed), b = runFaintFloor(true, seed);
     without.measured_at_rest += a.measured_at_rest, without.aligned_at_rest += a.aligned_at_rest, without.still += a.still;
     with.measured_at_rest += b.measured_at_rest, with.aligned_at_rest += b.aligned_at_rest, with.ok_off += b.ok_off;
-    with.still += b.still, with.still_near_truth += b.still_near_truth;
+    with.still += b.still, with.still_near_truth += b.still_near_truth, with.aligned += b.aligned;
   }
-  EXPECT_GE(without.measured_at_rest, 60);
-  EXPECT_GE(without.aligned_at_rest, 20);
+  EXPECT_GE(without.measured_at_rest, 10);
   EXPECT_EQ(without.still, 0);
   EXPECT_LE(with.measured_at_rest, 2);
   EXPECT_EQ(with.aligned_at_rest, 0);
   EXPECT_EQ(with.ok_off, 0);
-  EXPECT_GE(with.still, 80);
-  EXPECT_GE(with.still_near_truth, with.still * 85 / 100);
+  EXPECT_GE(with.aligned, 100);
+  EXPECT_GE(with.still, 1);
+  EXPECT_EQ(with.still_near_truth, with.still);
 }
 
-TEST(ImageAlignment, OnAFaintFloorAnAlignmentThatLeavesTheRobotBehindItsUsualStepIsNotBelieved) {
+TEST(ImageAlignment, OnAFaintFloorTheImagesMeasureTheStepsNeitherLeavingTheRobotBehindNorTurningShort) {
   // A faint floor a little less faint (5 grey levels), with the robot's artifacts: where the keypoints fail, the images
   // are aligned, and what stays in them pulls the alignment toward rest, turned or not. An alignment that moves the
-  // robot less than half its usual step is not believed (odometry.align_min_step_share). Measured (loops of 100
-  // frames, seeds 3 and 6), without / with: aligned frames 29 + 18 / 1 + 0, off by 5 mm or 0.5 degrees 28 + 18 / 0.
+  // robot less than half its usual step, or than a still feature's radius, is not believed
+  // (odometry.align_min_step_share). Measured (loops of 100 frames, seeds 3 and 6), without / with: aligned frames
+  // 97 + 74 / 95 + 74, off by 5 mm or 0.5 degrees 10 + 1 / 0. (Before the heading images measured the steps: aligned
+  // frames 29 + 18 / 1 + 0, off 28 + 18 / 0.)
+  // Their turns are not short: the heading images less the mean of the recent ones (what stays in the image) turn
+  // -0.006 degrees from the truth on average, where without taking it away they turned -0.020 (seeds 3 and 6: -0.023
+  // and -0.017) of the 3.6 degrees a frame.
   int aligned_off_without = 0, aligned_off_with = 0, aligned_with = 0;
+  double turn_error_rad = 0.0;
   for (const std::uint64_t seed : {3u, 6u}) {
     aligned_off_without += runFaintFloor(true, seed, 5.0, 0.0, sim::PathKind::loop, 100).aligned_off;
     const FaintFloorRun with = runFaintFloor(true, seed, 5.0, 0.5, sim::PathKind::loop, 100);
     aligned_off_with += with.aligned_off;
     aligned_with += with.aligned;
+    turn_error_rad += with.aligned_turn_error_rad;
   }
-  EXPECT_GE(aligned_off_without, 40);
+  EXPECT_GE(aligned_off_without, 8);
   EXPECT_EQ(aligned_off_with, 0);
-  EXPECT_LE(aligned_with, 3);
+  EXPECT_GE(aligned_with, 150);
+  EXPECT_LT(std::abs(turn_error_rad / std::max(1, aligned_with)), 0.012 * kDeg);
 }
 
 namespace {

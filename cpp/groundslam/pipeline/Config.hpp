@@ -115,6 +115,10 @@ struct OdometryChecks {
   double align_highpass_fraction = 0.08;
   bool align_normalise_contrast = false;
   double align_min_correlation = 0.7;
+  /// Odometry aligns the contrast-normalised heading images (outdoor.heading_image_width_px) first: what stays still
+  /// in the image pulls them least. Finer and noisier than the reduced images, they correlate less: their alignment
+  /// is believed from this correlation on, the other conditions as above.
+  double align_heading_images_min_correlation = 0.6;
   double align_rest_ratio = 2.0;
   double align_max_spread_m = 0.002;
   double align_sigma_m = 0.005;
@@ -431,6 +435,7 @@ void visitConfigFields(Config_& c, Visitor&& v) {
   v("odometry", "align_highpass_fraction", c.odometry_checks.align_highpass_fraction, Range{0.001, 1.0});
   v("odometry", "align_normalise_contrast", c.odometry_checks.align_normalise_contrast, Range{});
   v("odometry", "align_min_correlation", c.odometry_checks.align_min_correlation, Range{0.0, 1.0});
+  v("odometry", "align_heading_images_min_correlation", c.odometry_checks.align_heading_images_min_correlation, Range{0.0, 1.0});
   v("odometry", "align_rest_ratio", c.odometry_checks.align_rest_ratio, kNonNegative);
   v("odometry", "align_max_spread_m", c.odometry_checks.align_max_spread_m, kPositive);
   v("odometry", "align_sigma_m", c.odometry_checks.align_sigma_m, kNonNegative);

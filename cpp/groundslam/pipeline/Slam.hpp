@@ -116,13 +116,28 @@ class Slam {
   void setCandidateObserver(std::function<void(const LoopCandidate&)> observer, bool keep);
 
  private:
-  OdometryEdge estimateOdometry(const Keyframe& previous, const Keyframe& current,
-                                const std::optional<std::vector<Match>>& matched_ahead, const AlignmentImage& alignment,
-                                FrameResult& result);
-  /// Where the features are too few: the motion from aligning the previous image with this one, started from the
-  /// robot's usual steps and from several times as many (odometry.align_*; an alignment with a rival is not believed),
-  /// or nothing (pipeline/SlamAlignment.cpp).
-  std::optional<OdometryEdge> odometryByAlignment(const Keyframe& previous, const Keyframe& current, const AlignmentImage& alignment) const;
+  OdometryEdge estimateOdometry(const Keyframe& previous, const Keyframe& current, const PreparedFrame& prepared, FrameResult& result);
+  /// Two images of one kind an alignment compares (sharing the frames' pixels, or made from them), how they were made,
+  /// and the least correlation that believes their alignment.
+  struct ImagePair {
+    AlignmentImage before, now;
+    const ImageAlignmentSettings* settings = nullptr;
+    double min_correlation = 0.0;
+    double rest_ratio = 0.0;  ///< how many times better than rest (and any rival) the alignment must explain the images
+    bool empty() const { return before.pixels.empty() || now.pixels.empty(); }
+  };
+  /// The previous frame's images and this one's that odometry aligns, in the order tried: the alignment's reduced
+  /// images where they clearly tell the motion from rest (kClearlyBetterThanRest times odometry.align_rest_ratio); the
+  /// contrast-normalised heading images less the mean of the recent ones (once kHeadingBackgroundImages were seen) and
+  /// as they are (odometry.align_heading_images_min_correlation); the reduced images again, believed as any alignment.
+  std::vector<ImagePair> odometryImagePairs(const PreparedFrame& prepared) const;
+  static constexpr double kClearlyBetterThanRest = 2.0;
+  /// Where the features are too few: the motion from aligning the previous images with this frame's (each pair of
+  /// odometryImagePairs in turn), started from the robot's usual steps and from several times as many
+  /// (odometry.align_*; an alignment with a rival is not believed), or nothing (pipeline/SlamAlignment.cpp).
+  std::optional<OdometryEdge> odometryByAlignment(const Keyframe& previous, const Keyframe& current, const PreparedFrame& prepared) const;
+  /// One pair's alignment from the usual steps (odometryByAlignment), kept when plausible and moving the robot.
+  std::optional<OdometryEdge> alignedFromSteps(const ImagePair& images, const Keyframe& previous, const Keyframe& current) const;
   /// False when an aligned motion over `steps` frames leaves the robot nearly where it was without a sharp turn
   /// (odometry.align_min_step_share of the usual step, per frame).
   bool movedTheRobot(const Pose2& T_prev_curr, int steps = 1) const;
@@ -132,12 +147,13 @@ class Slam {
   std::optional<OdometryEdge> restRefuted(const Keyframe& previous, const Keyframe& current, const OdometryEdge& odometry,
                                           const PreparedFrame& prepared) const;
   /// A fit refused for too little evidence, measured again near the motion the images' spectra show
-  /// (odometry.gap_by_spectra): by the features matched there (`low_overlap`), else by the images aligned from there
-  /// (`aligned`). None when the spectra show nothing or neither stays with them, or on a floor that repeats.
+  /// (odometry.gap_by_spectra): where that motion spans frames dropped or turns sharply, by the features matched near
+  /// it (`low_overlap`); else, or failing that, by the images aligned from it (`aligned`). None when the spectra show
+  /// nothing or neither stays with them, or on a floor that repeats.
   std::optional<OdometryEdge> gapBySpectra(const Keyframe& previous, const Keyframe& current, const OdometryEdge& odometry,
                                            const PreparedFrame& prepared) const;
-  /// The images aligned from the spectra's motion, kept when believable, within align_sigma_m and 1 degree of it,
-  /// plausible and moving the robot (`aligned`); none otherwise.
+  /// The images aligned from the spectra's motion (each pair of odometryImagePairs in turn), kept when believable,
+  /// within align_sigma_m and 1 degree of it, plausible and moving the robot (`aligned`); none otherwise.
   std::optional<OdometryEdge> alignedFromSpectra(const Keyframe& previous, const Keyframe& current, const Pose2& by_spectra,
                                                  const PreparedFrame& prepared) const;
   /// Whether a measured motion stays within align_sigma_m and 1 degree of the spectra's.
@@ -172,14 +188,17 @@ class Slam {
   /// The edge of a fit measured on a second look at a low-overlap pair (`low_overlap`): `used` its matches, `matches`
   /// the frame's ratio-test matches; low_overlap_sigma_m and low_overlap_sigma_rad added to its covariance.
   OdometryEdge lowOverlapEdge(const RigidEstimate& fit, std::vector<Match> used, int matches) const;
-  /// An alignment that passes odometry.align_* (correlation, better than rest, probes' spread).
-  bool believable(const ImageAlignment& aligned) const;
+  /// An alignment that passes odometry.align_* (correlation of at least `min_correlation`, `rest_ratio` times better
+  /// than rest and any rival, probes' spread).
+  bool believable(const ImageAlignment& aligned, double min_correlation, double rest_ratio) const;
   /// Image warps where `steps` of the robot's usual steps put the ground; with `more_steps`, also where up to
   /// repetition_max_steps times as many do.
   std::vector<cv::Matx23d> stepStarts(int steps, bool more_steps) const;
   /// Aligns from stepStarts (an alignment with a rival is not believed), or failing that from the few turns on the
   /// spot that make the images most alike.
-  std::optional<ImageAlignment> alignFromSteps(const AlignmentImage& before, const AlignmentImage& now, int steps, bool more_steps) const;
+  std::optional<ImageAlignment> alignFromSteps(const ImagePair& images, int steps, bool more_steps) const;
+  /// The alignment's reduced images of `before` and `now` (odometry.align_min_correlation).
+  ImagePair reducedImages(const AlignmentImage& before, const AlignmentImage& now) const;
   /// Right after tracking was lost (within odometry.bridge_max_frames frames): the current frame measured against
   /// the last tracked one joins the segment to the map, as a relocalization would (the map may not reach where the
   /// robot goes, and weak floors give global localization too little); when that frame is of a lost segment, the
@@ -504,6 +523,13 @@ class Slam {
   std::optional<Keyframe> previous_;
   AlignmentImage previous_alignment_;  ///< the previous image as the alignment uses it (odometry.align_images)
   AlignmentImage previous_heading_;    ///< the previous image as the heading refinement uses it where artifacts are seen
+  /// The mean of the recent heading images (over fallback.turn_background_frames, as turn_background_): what stays in
+  /// the image. Taken away from both images once this many were seen.
+  cv::Mat heading_background_;
+  int heading_images_seen_ = 0;
+  static constexpr int kHeadingBackgroundImages = 3;
+  /// heading_background_ with `image` in it.
+  void keepHeadingImage(const AlignmentImage& image);
   cv::Mat previous_turn_image_;  ///< the previous image as turnBySpectra uses it (CV_32F)
   cv::Mat turn_background_;      ///< the mean of the recent turn images (FallbackSettings::turn_background_frames)
   int turn_images_seen_ = 0;

@@ -125,7 +125,7 @@ std::optional<Slam::Bridge> Slam::bridgeByAlignment(const Keyframe& current, con
   const OdometryChecks& checks = config_.odometry_checks;
   if (!checks.align_images || tracked_alignment_.pixels.empty() || alignment.pixels.empty()) return std::nullopt;
   const int frames_since = current.index - tracked_frame_;
-  const auto aligned = alignFromSteps(tracked_alignment_, alignment, frames_since, false);
+  const auto aligned = alignFromSteps(reducedImages(tracked_alignment_, alignment), frames_since, false);
   if (!aligned) return std::nullopt;
   const Pose2 T_tracked_current = groundMotionOf(aligned->W_previous_current);
   // Near rest, as odometry's alignments are judged: what stays in the image pulls an alignment there (measured
