@@ -134,12 +134,12 @@ struct OdometryChecks {
   /// not known (`fallback_still`, or `lost_still` with loop closure). false: rest is never checked.
   bool rest_check_by_spectra = true;
   /// A fit refused for too little evidence (too few matches or inliers, degenerate) on a floor that does not repeat is
-  /// measured again from the images' spectra, less the mean of the recent images, where they show a motion spanning
-  /// frames dropped (at least 1.5 of the robot's usual steps long; a sudden turn is left to the bridges): the
-  /// features are matched only near where that motion puts them (bridge_search_radius_m), and the fit is kept
-  /// (`low_overlap`) when it has no rival and stays within align_sigma_m and 1 degree of it; else the images are
-  /// aligned from that motion (`aligned`), kept as closely. Frames dropped without a trace leave the images
-  /// overlapping by less than half: too few features match among all of them. false: such a fit is a loss.
+  /// measured again from the images' spectra, less the mean of the recent images. Where they show a motion spanning
+  /// frames dropped (at least 1.5 of the robot's usual steps long) the features are matched only near where that
+  /// motion puts them (bridge_search_radius_m), and the fit is kept (`low_overlap`) when it has no rival and stays
+  /// within align_sigma_m and 1 degree of it; else, and for any other motion, the images are aligned from that motion
+  /// (`aligned`), kept as closely. Frames dropped without a trace leave the images overlapping by less than half: too
+  /// few features match among all of them. false: such a fit is a loss.
   bool gap_by_spectra = true;
   /// A fit with fewer inliers than this is checked by aligning the images from its motion: an alignment believed
   /// as above that ends more than align_check_m or align_check_rad away replaces it (the frame says `aligned`)
