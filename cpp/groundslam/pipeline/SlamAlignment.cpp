@@ -271,9 +271,13 @@ std::optional<OdometryEdge> Slam::alignedFromSpectra(const Keyframe& previous, c
                                                      const PreparedFrame& prepared) const {
   // Judged as any alignment, and kept only where it stays with the spectra's motion.
   if (!config_.odometry_checks.align_images) return std::nullopt;
+  const std::vector<cv::Matx23d> start = {imageWarpOf(by_spectra)};
+  std::optional<ImageAlignment> reduced;  // the reduced images come twice, judged more strictly first: aligned once
   for (const ImagePair& images : odometryImagePairs(prepared)) {
     if (images.empty()) continue;
-    const ImageAlignment aligned = alignImages(images.before, images.now, {imageWarpOf(by_spectra)}, *images.settings);
+    const bool is_reduced = images.settings == &alignment_settings_;
+    if (is_reduced && !reduced) reduced = alignImages(images.before, images.now, start, *images.settings);
+    const ImageAlignment aligned = is_reduced ? *reduced : alignImages(images.before, images.now, start, *images.settings);
     const Pose2 T_prev_curr = groundMotionOf(aligned.W_previous_current);
     if (believable(aligned, images.min_correlation, images.rest_ratio) && withTheSpectra(by_spectra, T_prev_curr) &&
         plausibleMotion(T_prev_curr, previous.timestamp, current.timestamp) && movedTheRobot(T_prev_curr)) {
