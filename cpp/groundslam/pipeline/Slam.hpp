@@ -139,7 +139,7 @@ class Slam {
   /// One pair's alignment from the usual steps (odometryByAlignment), kept when plausible and moving the robot.
   std::optional<OdometryEdge> alignedFromSteps(const ImagePair& images, const Keyframe& previous, const Keyframe& current) const;
   /// False when an aligned motion over `steps` frames leaves the robot nearly where it was without a sharp turn
-  /// (odometry.align_min_step_share of the usual step, per frame).
+  /// (odometry.align_min_step_share of the usual step, per frame, and at least a still feature's reach).
   bool movedTheRobot(const Pose2& T_prev_curr, int steps = 1) const;
   /// A fit that leaves every match in place, or an alignment every keypoint, while the images' spectra show the
   /// ground moving (odometry.rest_check_by_spectra): the motion the images measure from there (`aligned`), else a fallback
@@ -147,8 +147,8 @@ class Slam {
   std::optional<OdometryEdge> restRefuted(const Keyframe& previous, const Keyframe& current, const OdometryEdge& odometry,
                                           const PreparedFrame& prepared) const;
   /// A fit refused for too little evidence, measured again near the motion the images' spectra show
-  /// (odometry.gap_by_spectra): where that motion spans frames dropped or turns sharply, by the features matched near
-  /// it (`low_overlap`); else, or failing that, by the images aligned from it (`aligned`). None when the spectra show
+  /// (odometry.gap_by_spectra): where that motion spans frames dropped, by the features matched near it
+  /// (`low_overlap`); else, or failing that, by the images aligned from it (`aligned`). None when the spectra show
   /// nothing or neither stays with them, or on a floor that repeats.
   std::optional<OdometryEdge> gapBySpectra(const Keyframe& previous, const Keyframe& current, const OdometryEdge& odometry,
                                            const PreparedFrame& prepared) const;
