@@ -239,6 +239,10 @@ FrameResult Slam::process(PreparedFrame prepared) {
     if (lost_) bridgeLoss(current, prepared, result);
   } else if (prior_frames_ > 0) closeLoopsOnPriorMap(ground, result);
   optimiseIfDue(result, false);
+  if (prior_frames_ == 0) {
+    keepEarlyImages(frame, prepared);
+    remeasureGivenUpFrames(frame);
+  }
   // Once the map holds the segment just found in place: segments lost again before they were found may lie on its
   // ground.
   if (orphans_due_ && !lost_) joinOrphanSegments(result);

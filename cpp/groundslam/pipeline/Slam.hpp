@@ -131,6 +131,9 @@ class Slam {
   /// contrast-normalised heading images less the mean of the recent ones (once kHeadingBackgroundImages were seen) and
   /// as they are (odometry.align_heading_images_min_correlation); the reduced images again, believed as any alignment.
   std::vector<ImagePair> odometryImagePairs(const PreparedFrame& prepared) const;
+  /// The same pairs from two frames' reduced and heading images.
+  std::vector<ImagePair> imagePairs(const AlignmentImage& reduced_before, const AlignmentImage& heading_before,
+                                    const AlignmentImage& reduced_now, const AlignmentImage& heading_now) const;
   static constexpr double kClearlyBetterThanRest = 2.0;
   /// Where the features are too few: the motion from aligning the previous images with this frame's (each pair of
   /// odometryImagePairs in turn), started from the robot's usual steps and from several times as many
@@ -606,6 +609,23 @@ class Slam {
   bool lost_ = false;          ///< tracking was lost and the current segment is not yet joined to the map
   int lost_since_ = 0;         ///< first frame of the current segment
   int map_start_ = 0;          ///< the map's first frame (later than 0 when tracking was lost at once)
+  /// The run's first frames' images, while the map may still start again (odometry_checks.restart_map_below_frames):
+  /// where it did, the motions given up there are measured again from them once the alignment knows the usual step
+  /// and the mean of the heading images, and the frames join the map (pipeline/SlamGivenUpFrames.cpp).
+  struct EarlyImages {
+    AlignmentImage reduced, heading;
+  };
+  std::vector<EarlyImages> early_images_;
+  bool given_up_frames_measured_ = false;
+  /// A motion's graph edge with less information in heading than this was not measured (informationFreeEdge).
+  static constexpr double kLeastMeasuredInformation = 1.0;
+  void keepEarlyImages(int frame, const PreparedFrame& prepared);
+  /// Once the map can no longer start again: the given-up motions from map_start_ back, each aligned as odometry
+  /// aligns a frame from the usual steps, until one is not believed; each measured joins its frame to the map.
+  void remeasureGivenUpFrames(int frame);
+  std::optional<OdometryEdge> alignedGivenUpMotion(int from, int to) const;
+  /// The odometry edge (not a loop) from `from` to `to`, if any.
+  std::optional<size_t> odometryEdgeBetween(int from, int to) const;
   bool ever_lost_ = false;     ///< tracking was lost before (the map starts again only at the run's first loss)
   int prior_frames_ = 0;       ///< graph poses 0..prior_frames_-1 are a prior map's keyframes, held fixed
   int last_prior_attempt_ = -1000000;  ///< frame of the last localization on the prior map

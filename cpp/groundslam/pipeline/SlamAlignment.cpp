@@ -146,20 +146,26 @@ std::vector<Slam::ImagePair> Slam::odometryImagePairs(const PreparedFrame& prepa
   // blobs; the heading images' own find rivals within a degree): where they tell the motion from rest clearly they are
   // believed first (measured: 7.6-9.7 times better explained than rest there; 2.0-2.1 times where, pulled by the
   // robot's artifacts, they were 0.5-1.6 degrees off on the nki ground loops).
+  return imagePairs(previous_alignment_, previous_heading_, prepared.alignment, prepared.heading);
+}
+
+std::vector<Slam::ImagePair> Slam::imagePairs(const AlignmentImage& reduced_before, const AlignmentImage& heading_before,
+                                              const AlignmentImage& reduced_now, const AlignmentImage& heading_now) const {
   const OdometryChecks& checks = config_.odometry_checks;
-  const ImagePair reduced = reducedImages(previous_alignment_, prepared.alignment);
-  if (previous_heading_.pixels.empty() || prepared.heading.pixels.empty()) return {reduced};
+  const ImagePair reduced = reducedImages(reduced_before, reduced_now);
+  if (heading_before.pixels.empty() || heading_now.pixels.empty()) return {reduced};
   ImagePair clearly_reduced = reduced;
   clearly_reduced.rest_ratio *= kClearlyBetterThanRest;
   std::vector<ImagePair> pairs = {clearly_reduced};
-  const ImagePair heading{previous_heading_, prepared.heading, &artifact_headings_.settings, checks.align_heading_images_min_correlation,
+  const ImagePair heading{heading_before, heading_now, &artifact_headings_.settings, checks.align_heading_images_min_correlation,
                           checks.align_rest_ratio};
-  if (heading_images_seen_ >= kHeadingBackgroundImages && heading_background_.size() == prepared.heading.pixels.size()) {
+  if (heading_images_seen_ >= kHeadingBackgroundImages && heading_background_.size() == heading_now.pixels.size() &&
+      heading_background_.size() == heading_before.pixels.size()) {
     ImagePair without_background = heading;
     without_background.before.pixels = cv::Mat();  // new pixels: the pair shares the frames' own until here
     without_background.now.pixels = cv::Mat();
-    cv::subtract(previous_heading_.pixels, heading_background_, without_background.before.pixels);
-    cv::subtract(prepared.heading.pixels, heading_background_, without_background.now.pixels);
+    cv::subtract(heading_before.pixels, heading_background_, without_background.before.pixels);
+    cv::subtract(heading_now.pixels, heading_background_, without_background.now.pixels);
     pairs.push_back(std::move(without_background));
   }
   pairs.push_back(heading);
