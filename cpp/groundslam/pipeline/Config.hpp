@@ -228,6 +228,10 @@ struct OdometryChecks {
   /// and the failing frames right after it: a floor that keeps losing the robot makes no map by starting again.
   /// 0: a lost segment is always relocalized.
   int restart_map_below_frames = 10;
+  /// Where the map started again, the motions given up before it are measured again by aligning their images once the
+  /// map can no longer start again (the usual step and the mean of the heading images known by then); each one
+  /// believed joins its frame to the map, back to the first, which anchors the world frame.
+  bool measure_given_up_frames = true;
   /// Right after tracking is lost for too little evidence on a floor that does not repeat, each frame up to this many
   /// after the last tracked one is measured against it (its features, else the images aligned); the first that is
   /// joins the lost segment to the map. 0: off.
@@ -467,6 +471,7 @@ void visitConfigFields(Config_& c, Visitor&& v) {
   v("odometry", "repetition_margin", c.odometry_checks.repetition_margin, Range{1.0, 1000.0});
   v("odometry", "repetition_support_ratio", c.odometry_checks.repetition_support_ratio, kNonNegative);
   v("odometry", "restart_map_below_frames", c.odometry_checks.restart_map_below_frames, Range{0, 1e9});
+  v("odometry", "measure_given_up_frames", c.odometry_checks.measure_given_up_frames, Range{});
   v("odometry", "bridge_max_frames", c.odometry_checks.bridge_max_frames, Range{0, 1000});
   v("odometry", "bridge_corroborated_min_inliers", c.odometry_checks.bridge_corroborated_min_inliers, Range{0, 100000});
   v("odometry", "bridge_corroboration_m", c.odometry_checks.bridge_corroboration_m, kPositive);

@@ -13,7 +13,8 @@
 namespace groundslam {
 
 void Slam::keepEarlyImages(int frame, const PreparedFrame& prepared) {
-  if (frame >= config_.odometry_checks.restart_map_below_frames || !config_.odometry_checks.align_images) return;
+  const OdometryChecks& checks = config_.odometry_checks;
+  if (frame >= checks.restart_map_below_frames || !checks.measure_given_up_frames || !checks.align_images) return;
   // Copies: the frames' own pixels are moved on and may be reused in place.
   const auto copy = [](const AlignmentImage& image) { return AlignmentImage{image.pixels.clone(), image.scale, image.ground.clone()}; };
   early_images_.push_back({copy(prepared.alignment), copy(prepared.heading)});
