@@ -259,6 +259,7 @@ FrameResult Slam::process(PreparedFrame prepared) {
   if ((!lost_ && measured_.back()) || in_lost_segment) {
     tracked_keyframe_ = previous_;
     tracked_alignment_ = prepared.alignment;  // shares the pixels: neither is changed
+    tracked_heading_ = prepared.heading;
     tracked_turn_image_ = prepared.turn;
     tracked_frame_ = frame;
     tracked_time_ = prepared.timestamp;

@@ -159,6 +159,10 @@ class Slam {
   /// within align_sigma_m and 1 degree of it, plausible and moving the robot (`aligned`); none otherwise.
   std::optional<OdometryEdge> alignedFromSpectra(const Keyframe& previous, const Keyframe& current, const Pose2& by_spectra,
                                                  const PreparedFrame& prepared) const;
+  /// The first of `pairs` whose alignment from `by_spectra` is believable, within align_sigma_m and 1 degree of it,
+  /// moving the robot over `steps` frames and `plausible` (if given).
+  std::optional<Pose2> alignedNear(const Pose2& by_spectra, const std::vector<ImagePair>& pairs, int steps,
+                                   const std::function<bool(const Pose2&)>& plausible = {}) const;
   /// Whether a measured motion stays within align_sigma_m and 1 degree of the spectra's.
   bool withTheSpectra(const Pose2& by_spectra, const Pose2& T_prev_curr) const;
   /// A motion the robot's usual step does not explain: frames dropped (at least kGapSteps usual steps long).
@@ -230,7 +234,9 @@ class Slam {
   /// segment starts or joins the map).
   std::optional<Bridge> confirmedSearch(const Keyframe& current, const PreparedFrame& prepared);
   /// The current image registered with the last tracked frame's by their spectra (odometry.bridge_spectral_min_peak).
-  std::optional<Bridge> bridgeBySpectra(const cv::Mat& turn_image, double turn_scale) const;
+  /// Their motion is refined by aligning the two frames' images from it (alignedNear): the spectra measure the turn in
+  /// half-degree bins.
+  std::optional<Bridge> bridgeBySpectra(const Keyframe& current, const PreparedFrame& prepared) const;
   /// The motion from the image `before` to `turn_image` (both as turnBySpectra uses them) by their spectra, both less
   /// the mean of the recent images: believed with a clear phase correlation peak and a shift of the ground.
   std::optional<Bridge> motionBySpectra(const cv::Mat& before, const cv::Mat& turn_image, double turn_scale) const;
@@ -543,6 +549,7 @@ class Slam {
   std::vector<LoopRays> loop_rays_;              ///< every loop closed during the run, for remeasureLoops
   cv::Mat tracked_turn_image_;         ///< the last tracked frame's image as bridgeBySpectra uses it
   AlignmentImage tracked_alignment_;   ///< the last tracked frame's image, keyframe, graph index and time (bridgeLoss)
+  AlignmentImage tracked_heading_;     ///< its heading image (bridgeBySpectra)
   std::optional<Keyframe> tracked_keyframe_;  ///< its features as projected with its mount (bridgeByFeatures)
   int tracked_frame_ = -1;
   double tracked_time_ = 0.0;

@@ -277,17 +277,26 @@ std::optional<OdometryEdge> Slam::alignedFromSpectra(const Keyframe& previous, c
                                                      const PreparedFrame& prepared) const {
   // Judged as any alignment, and kept only where it stays with the spectra's motion.
   if (!config_.odometry_checks.align_images) return std::nullopt;
+  const auto aligned = alignedNear(by_spectra, odometryImagePairs(prepared), 1, [&](const Pose2& T_prev_curr) {
+    return plausibleMotion(T_prev_curr, previous.timestamp, current.timestamp);
+  });
+  if (aligned) return alignedEdge(*aligned);
+  return std::nullopt;
+}
+
+std::optional<Pose2> Slam::alignedNear(const Pose2& by_spectra, const std::vector<ImagePair>& pairs, int steps,
+                                       const std::function<bool(const Pose2&)>& plausible) const {
   const std::vector<cv::Matx23d> start = {imageWarpOf(by_spectra)};
   std::optional<ImageAlignment> reduced;  // the reduced images come twice, judged more strictly first: aligned once
-  for (const ImagePair& images : odometryImagePairs(prepared)) {
+  for (const ImagePair& images : pairs) {
     if (images.empty()) continue;
     const bool is_reduced = images.settings == &alignment_settings_;
     if (is_reduced && !reduced) reduced = alignImages(images.before, images.now, start, *images.settings);
     const ImageAlignment aligned = is_reduced ? *reduced : alignImages(images.before, images.now, start, *images.settings);
     const Pose2 T_prev_curr = groundMotionOf(aligned.W_previous_current);
     if (believable(aligned, images.min_correlation, images.rest_ratio) && withTheSpectra(by_spectra, T_prev_curr) &&
-        plausibleMotion(T_prev_curr, previous.timestamp, current.timestamp) && movedTheRobot(T_prev_curr)) {
-      return alignedEdge(T_prev_curr);
+        (!plausible || plausible(T_prev_curr)) && movedTheRobot(T_prev_curr, steps)) {
+      return T_prev_curr;
     }
   }
   return std::nullopt;
