@@ -708,10 +708,13 @@ struct FirstFramesRun {
   int first_lost = 0;       ///< frames 1..4 lost (the map started again after them)
   int first_measured = 0;   ///< frames 0..4 measured in the final trajectory
   double worst_heading_rad = 0.0;  ///< over the run, every pose anchored at frame 0 as the tables do
+  int bridges = 0;                 ///< graph edges over a loss (bridges and relocalizations)
+  double worst_bridge_m = 0.0, worst_bridge_rad = 0.0;
 };
 
-/// Full SLAM (loop closure on) outdoors over a faint floor of `contrast` grey levels: how the run's first frames end.
-FirstFramesRun runFaintFloorStart(std::uint64_t seed, double contrast, int frames, bool measure_given_up) {
+/// Full SLAM (loop closure on) outdoors over a faint floor of `contrast` grey levels, frame `blank` covered (a blank
+/// image): how the run's first frames end, and how far the edges over a loss are from the truth.
+FirstFramesRun runFaintFloorStart(std::uint64_t seed, double contrast, int frames, bool measure_given_up, int blank = -1) {
   sim::SimulationSettings s = floorRun(sim::PathKind::loop, frames, seed);
   groundslam::testing::putUnderTheOutdoorLook(s);
   s.wet_after = 1.0;
@@ -722,8 +725,16 @@ FirstFramesRun runFaintFloorStart(std::uint64_t seed, double contrast, int frame
   Slam slam(config, std::make_shared<const Vocabulary>(readVocabulary(std::string(GROUNDSLAM_SOURCE_DIR) + "/config/vocabulary/ground.gslmvoc")));
   FirstFramesRun run;
   for (int i = 0; i < simulator.frameCount(); ++i) {
-    const FrameResult r = slam.process(simulator.renderFrame(i), i);
+    const cv::Mat image = i == blank ? cv::Mat(simulator.renderFrame(i).size(), CV_8U, cv::Scalar(128)) : simulator.renderFrame(i);
+    const FrameResult r = slam.process(image, i);
     if (i >= 1 && i <= 4 && r.status == FrameStatus::lost) ++run.first_lost;
+  }
+  for (const GraphEdge& e : slam.graph().edges()) {
+    if (!e.loop) continue;
+    const Pose2 truth = between(simulator.groundTruth()[size_t(e.from)], simulator.groundTruth()[size_t(e.to)]);
+    ++run.bridges;
+    run.worst_bridge_m = std::max(run.worst_bridge_m, (e.T_from_to.translation() - truth.translation()).norm());
+    run.worst_bridge_rad = std::max(run.worst_bridge_rad, std::abs(wrapAngle(e.T_from_to.theta - truth.theta)));
   }
   slam.finish();
   const Trajectory estimate = slam.trajectory();
@@ -736,6 +747,19 @@ FirstFramesRun runFaintFloorStart(std::uint64_t seed, double contrast, int frame
 }
 
 }  // namespace
+
+TEST(ImageAlignment, OnAFaintFloorABridgeTheSpectraFoundIsMeasuredByTheImagesAlignedFromIt) {
+  // The faint floor outdoors, frame 20 covered: the features cannot bridge the loss, the images' spectra can (frame
+  // 21, confirmed by frame 22). The spectra find the turn in half-degree bins and, on this floor, up to 1.5 degrees
+  // off; the heading images aligned from there measure it. Measured (seeds 3 and 6), the bridges' worst heading error
+  // without / with the alignment: 1.453 and 0.547 / 0.055 and 0.032 degrees.
+  for (const std::uint64_t seed : {3u, 6u}) {
+    const FirstFramesRun run = runFaintFloorStart(seed, 5.0, 30, true, 20);
+    EXPECT_GE(run.bridges, 2) << seed;
+    EXPECT_LT(run.worst_bridge_m, 0.005) << seed;
+    EXPECT_LT(run.worst_bridge_rad, 0.2 * kDeg) << seed;
+  }
+}
 
 TEST(ImageAlignment, OnAFaintFloorTheFirstFramesGivenUpAreMeasuredOnceTheStepIsKnownAndTheRunIsNotTurnedByThem) {
   // A faint floor outdoors (5 grey levels; loops of 30 frames, 3.6 degrees a frame): frame 1 cannot be measured

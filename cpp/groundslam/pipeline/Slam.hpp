@@ -159,12 +159,12 @@ class Slam {
   /// within align_sigma_m and 1 degree of it, plausible and moving the robot (`aligned`); none otherwise.
   std::optional<OdometryEdge> alignedFromSpectra(const Keyframe& previous, const Keyframe& current, const Pose2& by_spectra,
                                                  const PreparedFrame& prepared) const;
-  /// The first of `pairs` whose alignment from `by_spectra` is believable, within align_sigma_m and 1 degree of it,
-  /// moving the robot over `steps` frames and `plausible` (if given).
+  /// The first of `pairs` whose alignment from `by_spectra` is believable, within align_sigma_m and `turn_apart_rad`
+  /// of it, moving the robot over `steps` frames and `plausible` (if given).
   std::optional<Pose2> alignedNear(const Pose2& by_spectra, const std::vector<ImagePair>& pairs, int steps,
-                                   const std::function<bool(const Pose2&)>& plausible = {}) const;
-  /// Whether a measured motion stays within align_sigma_m and 1 degree of the spectra's.
-  bool withTheSpectra(const Pose2& by_spectra, const Pose2& T_prev_curr) const;
+                                   const std::function<bool(const Pose2&)>& plausible = {}, double turn_apart_rad = M_PI / 180.0) const;
+  /// Whether a measured motion stays within align_sigma_m and `turn_apart_rad` of the spectra's.
+  bool withTheSpectra(const Pose2& by_spectra, const Pose2& T_prev_curr, double turn_apart_rad = M_PI / 180.0) const;
   /// A motion the robot's usual step does not explain: frames dropped (at least kGapSteps usual steps long).
   bool unlikeTheRobotsStep(const Pose2& T_prev_curr) const;
   /// What the images say of a fit: not checked (enough inliers), it agrees, the aligned motion replaces it, or nothing.

@@ -285,7 +285,7 @@ std::optional<OdometryEdge> Slam::alignedFromSpectra(const Keyframe& previous, c
 }
 
 std::optional<Pose2> Slam::alignedNear(const Pose2& by_spectra, const std::vector<ImagePair>& pairs, int steps,
-                                       const std::function<bool(const Pose2&)>& plausible) const {
+                                       const std::function<bool(const Pose2&)>& plausible, double turn_apart_rad) const {
   const std::vector<cv::Matx23d> start = {imageWarpOf(by_spectra)};
   std::optional<ImageAlignment> reduced;  // the reduced images come twice, judged more strictly first: aligned once
   for (const ImagePair& images : pairs) {
@@ -294,7 +294,7 @@ std::optional<Pose2> Slam::alignedNear(const Pose2& by_spectra, const std::vecto
     if (is_reduced && !reduced) reduced = alignImages(images.before, images.now, start, *images.settings);
     const ImageAlignment aligned = is_reduced ? *reduced : alignImages(images.before, images.now, start, *images.settings);
     const Pose2 T_prev_curr = groundMotionOf(aligned.W_previous_current);
-    if (believable(aligned, images.min_correlation, images.rest_ratio) && withTheSpectra(by_spectra, T_prev_curr) &&
+    if (believable(aligned, images.min_correlation, images.rest_ratio) && withTheSpectra(by_spectra, T_prev_curr, turn_apart_rad) &&
         (!plausible || plausible(T_prev_curr)) && movedTheRobot(T_prev_curr, steps)) {
       return T_prev_curr;
     }
@@ -314,10 +314,10 @@ bool Slam::unlikeTheRobotsStep(const Pose2& T_prev_curr) const {
   return T_prev_curr.translation().norm() > kGapSteps * usualStep().translation().norm();
 }
 
-bool Slam::withTheSpectra(const Pose2& by_spectra, const Pose2& T_prev_curr) const {
-  // Within the doubt an aligned motion carries (align_sigma_m) and the spectra's 1 degree.
+bool Slam::withTheSpectra(const Pose2& by_spectra, const Pose2& T_prev_curr, double turn_apart_rad) const {
+  // Within the doubt an aligned motion carries (align_sigma_m) and the spectra's 1 degree (or turn_apart_rad).
   const Pose2 apart = by_spectra.inverse() * T_prev_curr;
-  return apart.translation().norm() <= config_.odometry_checks.align_sigma_m && std::abs(apart.theta) <= M_PI / 180.0;
+  return apart.translation().norm() <= config_.odometry_checks.align_sigma_m && std::abs(apart.theta) <= turn_apart_rad;
 }
 
 bool Slam::movedTheRobot(const Pose2& T_prev_curr, int steps) const {

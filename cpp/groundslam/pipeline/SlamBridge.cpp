@@ -200,12 +200,13 @@ std::optional<Slam::Bridge> Slam::confirmedSearch(const Keyframe& current, const
 std::optional<Slam::Bridge> Slam::bridgeBySpectra(const Keyframe& current, const PreparedFrame& prepared) const {
   std::optional<Bridge> found = motionBySpectra(tracked_turn_image_, prepared.turn, prepared.turn_scale);
   if (!found || !config_.odometry_checks.align_images) return found;
-  // The spectra find the turn in half-degree bins: left as found, each bridge turned the map by up to a quarter of a
-  // degree and more (measured on a dev nki ground lawnmower outdoors, seed 501: bridges 0.42-1.00 degrees off, 2-3
-  // degrees over the run). Where the images aligned from there are believed, they measure it. Not judged by the robot's
-  // speed: the spectra's motion was not either (frames dropped without a trace).
+  // The spectra find the turn in half-degree bins, and on a faint floor up to 1.5 degrees off: left as found, each
+  // bridge turned the map by as much (measured on a dev nki ground lawnmower outdoors, seed 501: bridges 0.42-1.00
+  // degrees off). Where the images aligned from there are believed within kBridgeTurnApartDeg, they measure it. Not
+  // judged by the robot's speed: the spectra's motion was not either (frames dropped without a trace).
+  constexpr double kBridgeTurnApartDeg = 2.0;
   const std::vector<ImagePair> pairs = imagePairs(tracked_alignment_, tracked_heading_, prepared.alignment, prepared.heading);
-  if (const auto aligned = alignedNear(found->T_tracked_current, pairs, current.index - tracked_frame_)) {
+  if (const auto aligned = alignedNear(found->T_tracked_current, pairs, current.index - tracked_frame_, {}, kBridgeTurnApartDeg * M_PI / 180.0)) {
     found->T_tracked_current = *aligned;
   }
   return found;
