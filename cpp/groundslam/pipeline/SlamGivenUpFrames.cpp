@@ -34,7 +34,7 @@ void Slam::remeasureGivenUpFrames(int frame) {
     if (graph_.edges()[*edge].information(2, 2) < kLeastMeasuredInformation) {
       const auto motion = alignedGivenUpMotion(from, to);
       if (!motion) break;
-      graph_.remeasureEdge(*edge, motion->T_prev_curr, motion->covariance.inverse());
+      graph_.remeasureEdge(*edge, motion->T_prev_curr, informationFrom(motion->covariance, config_.graph.min_sigma_m, config_.graph.min_sigma_rad));
       // The map hangs from frame `to`: it moves with it, rigidly.
       const Pose2 moved = graph_.poses()[static_cast<size_t>(from)] * motion->T_prev_curr;
       const Pose2 correction = moved * graph_.poses()[static_cast<size_t>(to)].inverse();
