@@ -3,6 +3,7 @@
 // on a floor of bricks checked.
 #include <algorithm>
 #include <cmath>
+#include <memory>
 #include <random>
 #include <utility>
 #include <vector>
@@ -612,13 +613,25 @@ struct FaintFloorRun {
   double aligned_turn_error_rad = 0.0;  ///< summed over the aligned frames
 };
 
-/// Odometry alone, outdoors (the robot's shadow, lens dirt, a lamp's glare, a bumper, a rocking mount) over a faint
-/// floor of `contrast` grey levels, at 1 cm per frame; `check_rest`: odometry.rest_check_by_spectra.
-FaintFloorRun runFaintFloor(bool check_rest, std::uint64_t seed, double contrast = 3.0, double min_step_share = 0.5,
-                            sim::PathKind path = sim::PathKind::lawnmower, int frames = 60) {
+/// A faint floor's run outdoors (the robot's shadow, lens dirt, a lamp's glare, a bumper, a rocking mount), dry, at 1 cm
+/// per frame.
+sim::SimulationSettings faintFloorOutdoors(sim::PathKind path, int frames, std::uint64_t seed) {
   sim::SimulationSettings s = floorRun(path, frames, seed);
   groundslam::testing::putUnderTheOutdoorLook(s);
   s.wet_after = 1.0;
+  return s;
+}
+
+/// The vocabulary shipped with the project (loop closure and relocalization).
+std::shared_ptr<const Vocabulary> groundVocabulary() {
+  return std::make_shared<const Vocabulary>(readVocabulary(std::string(GROUNDSLAM_SOURCE_DIR) + "/config/vocabulary/ground.gslmvoc"));
+}
+
+/// Odometry alone, outdoors over a faint floor of `contrast` grey levels (faintFloorOutdoors); `check_rest`:
+/// odometry.rest_check_by_spectra.
+FaintFloorRun runFaintFloor(bool check_rest, std::uint64_t seed, double contrast = 3.0, double min_step_share = 0.5,
+                            sim::PathKind path = sim::PathKind::lawnmower, int frames = 60) {
+  const sim::SimulationSettings s = faintFloorOutdoors(path, frames, seed);
   const sim::SequenceSimulator simulator(s, faintTexture(512, contrast, seed));
   Config config = odometryOnlyConfig(s);
   config.odometry_checks.rest_check_by_spectra = check_rest;
@@ -715,14 +728,12 @@ struct FirstFramesRun {
 /// Full SLAM (loop closure on) outdoors over a faint floor of `contrast` grey levels, frame `blank` covered (a blank
 /// image): how the run's first frames end, and how far the edges over a loss are from the truth.
 FirstFramesRun runFaintFloorStart(std::uint64_t seed, double contrast, int frames, bool measure_given_up, int blank = -1) {
-  sim::SimulationSettings s = floorRun(sim::PathKind::loop, frames, seed);
-  groundslam::testing::putUnderTheOutdoorLook(s);
-  s.wet_after = 1.0;
+  const sim::SimulationSettings s = faintFloorOutdoors(sim::PathKind::loop, frames, seed);
   const sim::SequenceSimulator simulator(s, faintTexture(512, contrast, seed));
   Config config = odometryOnlyConfig(s);
   config.loop_closure.enabled = true;
   config.odometry_checks.measure_given_up_frames = measure_given_up;
-  Slam slam(config, std::make_shared<const Vocabulary>(readVocabulary(std::string(GROUNDSLAM_SOURCE_DIR) + "/config/vocabulary/ground.gslmvoc")));
+  Slam slam(config, groundVocabulary());
   FirstFramesRun run;
   for (int i = 0; i < simulator.frameCount(); ++i) {
     const cv::Mat image = i == blank ? cv::Mat(simulator.renderFrame(i).size(), CV_8U, cv::Scalar(128)) : simulator.renderFrame(i);
@@ -845,7 +856,7 @@ TEST(ImageAlignment, OnASmoothFloorABridgeThatTurnsTheRobotButLeavesItInPlaceIsN
   const sim::SequenceSimulator simulator(s, smoothTexture(512, 12.0, 11));
   Config config = odometryOnlyConfig(s);
   config.loop_closure.enabled = true;
-  Slam slam(config, std::make_shared<const Vocabulary>(readVocabulary(std::string(GROUNDSLAM_SOURCE_DIR) + "/config/vocabulary/ground.gslmvoc")));
+  Slam slam(config, groundVocabulary());
   const cv::Mat seen = simulator.renderFrame(29);
   std::vector<FrameStatus> status;
   for (int i = 0; i < 40; ++i) {
