@@ -16,7 +16,7 @@ SANITIZER_ENV = ASAN_OPTIONS=halt_on_error=1:abort_on_error=1:detect_leaks=1:che
 	UBSAN_OPTIONS=halt_on_error=1:abort_on_error=1:print_stacktrace=1 \
 	LSAN_OPTIONS=suppressions=$(CURDIR)/tests/lsan.supp:print_suppressions=0
 
-.PHONY: deps configure build test demo benchmark clean test-sanitize fuzz-deps fuzz
+.PHONY: deps configure build test demo benchmark clean test-sanitize test-sanitize-all sanitize-build fuzz-deps fuzz
 
 deps:
 	@bash scripts/install_deps.sh
@@ -33,13 +33,19 @@ test: build
 demo: build
 	@bash scripts/demo.sh $(BUILD_DIR)/groundslam
 
-# Every target built with -fsanitize=$(SANITIZE) in $(SANITIZE_DIR); every test of `make test` runs under it
-# (unit and end-to-end tests, the CLI error tests, the report test).
-test-sanitize: deps
+# Every target built with -fsanitize=$(SANITIZE) in $(SANITIZE_DIR); the tests of `make test` run under it (unit
+# and end-to-end tests, the CLI error and fault tests) but for those labelled `long` (tests/long_tests.cmake: accuracy
+# runs of 5 s or more each, 10-15 times as long sanitized); `make test-sanitize-all` runs those too.
+test-sanitize: sanitize-build
+	@cd $(SANITIZE_DIR) && $(SANITIZER_ENV) ctest --output-on-failure -j $(JOBS) -LE long
+
+test-sanitize-all: sanitize-build
+	@cd $(SANITIZE_DIR) && $(SANITIZER_ENV) ctest --output-on-failure -j $(JOBS)
+
+sanitize-build: deps
 	@cmake -S . -B $(SANITIZE_DIR) -DCMAKE_BUILD_TYPE=$(BUILD_TYPE) -DGROUNDSLAM_SANITIZE=$(SANITIZE) \
 		-DGROUNDSLAM_BUILD_BENCHMARKS=OFF -DGROUNDSLAM_BUILD_PYTHON=OFF > $(SANITIZE_DIR).configure.log 2>&1 || (cat $(SANITIZE_DIR).configure.log; exit 1)
 	@cmake --build $(SANITIZE_DIR) -j $(JOBS)
-	@cd $(SANITIZE_DIR) && $(SANITIZER_ENV) ctest --output-on-failure -j $(JOBS)
 
 fuzz-deps:
 	@bash scripts/install_deps.sh --fuzz

@@ -33,7 +33,7 @@ set(GROUNDSLAM_SANITIZE "" CACHE STRING "Comma-separated -fsanitize= list for ev
 if(GROUNDSLAM_SANITIZE)
   set(groundslam_sanitize_flags -fsanitize=${GROUNDSLAM_SANITIZE} -fsanitize=float-cast-overflow -fno-sanitize-recover=all
       -fno-omit-frame-pointer)
-  add_compile_options(${groundslam_sanitize_flags} -g -O1)
+  add_compile_options(${groundslam_sanitize_flags} -g -O2)
   add_link_options(${groundslam_sanitize_flags})
   message(STATUS "groundslam: sanitizers ${GROUNDSLAM_SANITIZE},float-cast-overflow")
 endif()
