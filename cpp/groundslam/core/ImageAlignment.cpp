@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <optional>
 #include <utility>
 
@@ -47,6 +48,12 @@ std::optional<std::pair<cv::Matx23d, double>> eccFrom(const cv::Mat& previous, c
   } catch (const cv::Exception&) {
     return std::nullopt;  // OpenCV reports a diverging or uncorrelated alignment by throwing: here it is data
   }
+}
+
+/// The bar's tests of the correlations alone (all but the probes' spread).
+bool clearsBarByCorrelation(const ImageAlignment& aligned, const AlignmentBar& bar) {
+  const double rival = std::max(aligned.rest_correlation, aligned.rival_correlation);
+  return aligned.converged && aligned.correlation >= bar.min_correlation && 1.0 - rival >= bar.rest_ratio * (1.0 - aligned.correlation);
 }
 
 /// ECC's correlation coefficient of two images over a mask: zero-mean, normalised (-1 when either is flat there
@@ -197,8 +204,12 @@ ImageAlignment refineAlignment(const AlignmentImage& previous, const AlignmentIm
   return refined;
 }
 
+bool clearsBar(const ImageAlignment& aligned, const AlignmentBar& bar) {
+  return clearsBarByCorrelation(aligned, bar) && aligned.spread_px * bar.metres_per_px <= bar.max_spread_m;
+}
+
 ImageAlignment alignImages(const AlignmentImage& previous, const AlignmentImage& current, const std::vector<cv::Matx23d>& starts,
-                           const ImageAlignmentSettings& settings) {
+                           const ImageAlignmentSettings& settings, const AlignmentBar& bar) {
   ImageAlignment best;
   if (!alignable(previous, current) || starts.empty()) return best;
   const GroundPixels ground = groundPixels(previous, current, starts.front(), settings);
@@ -225,6 +236,10 @@ ImageAlignment alignImages(const AlignmentImage& previous, const AlignmentImage&
   // ECC's correlation at rest, over the pixels the alignment used.
   best.rest_correlation = maskedCorrelation(previous_ground, current_ground, moving, 0.0);
   best.W_previous_current = toOriginalPixels(best_reduced, previous.scale);
+  if (!clearsBarByCorrelation(best, bar)) {
+    best.spread_px = std::numeric_limits<double>::infinity();  // not probed: it cannot be believed whatever they show
+    return best;
+  }
   // Probes: from starts shifted around the solution, the alignment must come back to it.
   const double d = settings.probe_px;
   for (const cv::Vec2d& shift : {cv::Vec2d(d, 0), cv::Vec2d(0, d), cv::Vec2d(-d, 0), cv::Vec2d(0, -d)}) {
@@ -234,6 +249,7 @@ ImageAlignment alignImages(const AlignmentImage& previous, const AlignmentImage&
     const auto probe = eccFrom(previous_ground, current_ground, moving, start, settings.max_iterations);
     const double off = probe ? warpDistance(probe->first, best_reduced, previous.pixels.size()) : d * 1e3;
     best.spread_px = std::max(best.spread_px, off * previous.scale);
+    if (best.spread_px * bar.metres_per_px > bar.max_spread_m) break;  // already beyond the bar: the rest cannot help
   }
   return best;
 }

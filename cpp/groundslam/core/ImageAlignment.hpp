@@ -5,6 +5,7 @@
 // coefficient (ECC; Evangelidis and Psarakis, PAMI 2008), started from where the robot's own steps put it.
 // What stays still in the image (the robot's shadow edge, lens dirt, a bumper) is left out of the alignment.
 
+#include <limits>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -59,6 +60,20 @@ struct ImageAlignment {
   double rival_correlation = -1.0;
 };
 
+/// What an alignment must show to be believed as a measurement of motion: converged, a correlation of at least
+/// min_correlation, explaining the images rest_ratio times better than rest and than any rival
+/// ((1 - rival) >= rest_ratio * (1 - correlation)), and probes that all come back within max_spread_m (spread_px
+/// times metres_per_px). The default bar is cleared by every converged alignment.
+struct AlignmentBar {
+  double min_correlation = -1.0;
+  double rest_ratio = 0.0;
+  double max_spread_m = std::numeric_limits<double>::infinity();
+  double metres_per_px = 0.0;  ///< at the image centre
+};
+
+/// Whether `aligned` clears `bar`.
+bool clearsBar(const ImageAlignment& aligned, const AlignmentBar& bar);
+
 /// 255 where the images may show moving ground, 0 where a textured neighbourhood looks the same at the same place
 /// in both images (settings.still_correlation) and more alike there than where the expected warp (current pixel to
 /// previous, pixels of these images) puts it: it moved with the camera.
@@ -71,8 +86,11 @@ cv::Mat movingPixels(const cv::Mat& previous, const cv::Mat& moved_previous, con
 /// pixels, current to previous); the one of highest correlation, probed from settings.probe_px around it. The
 /// first start is the expected motion that still parts are told by (movingPixels). Starts that end elsewhere are
 /// rivals (rival_correlation).
+/// The probes, most of the cost, are run only for a solution that clears `bar` by its correlations, and stop at the
+/// first that ends farther than the bar allows: a solution that cannot clear it has spread_px infinite (not probed)
+/// or that probe's distance, so clearsBar(result, bar) is what it would be with every probe run.
 ImageAlignment alignImages(const AlignmentImage& previous, const AlignmentImage& current, const std::vector<cv::Matx23d>& starts,
-                           const ImageAlignmentSettings& settings);
+                           const ImageAlignmentSettings& settings, const AlignmentBar& bar = {});
 
 /// One alignment of `current` onto `previous` from `start` (original pixels, current to previous), what stays still
 /// and the light's edges left out of both images (in the previous one, also where the start puts the current one's),

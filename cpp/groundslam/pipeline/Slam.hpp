@@ -198,6 +198,10 @@ class Slam {
   /// An alignment that passes odometry.align_* (correlation of at least `min_correlation`, `rest_ratio` times better
   /// than rest and any rival, probes' spread).
   bool believable(const ImageAlignment& aligned, double min_correlation, double rest_ratio) const;
+  /// What an alignment of images judged by `min_correlation` and `rest_ratio` must clear to be believed.
+  AlignmentBar alignmentBar(double min_correlation, double rest_ratio) const;
+  /// The pair's images aligned from each start, probed only where the pair's bar can be cleared.
+  ImageAlignment alignPair(const ImagePair& images, const std::vector<cv::Matx23d>& starts) const;
   /// Image warps where `steps` of the robot's usual steps put the ground; with `more_steps`, also where up to
   /// repetition_max_steps times as many do.
   std::vector<cv::Matx23d> stepStarts(int steps, bool more_steps) const;

@@ -100,15 +100,19 @@ void Slam::keepHeadingImage(const AlignmentImage& image) {
   cv::addWeighted(heading_background_, 1.0 - 1.0 / frames, image.pixels, 1.0 / frames, 0.0, heading_background_);
 }
 
-bool Slam::believable(const ImageAlignment& aligned, double min_correlation, double rest_ratio) const {
-  const OdometryChecks& checks = config_.odometry_checks;
+AlignmentBar Slam::alignmentBar(double min_correlation, double rest_ratio) const {
   // Explaining the images no better than rest is not a measurement of motion: the images' decorrelation at rest
   // must be rest_ratio (odometry.align_rest_ratio) times that after the warp.
   // Nor is explaining them no better than another motion does (a start that ended one repetition over).
-  const double rival = std::max(aligned.rest_correlation, aligned.rival_correlation);
-  return aligned.converged && aligned.correlation >= min_correlation &&
-         aligned.spread_px * ground_sample_m_ <= checks.align_max_spread_m &&
-         1.0 - rival >= rest_ratio * (1.0 - aligned.correlation);
+  return {min_correlation, rest_ratio, config_.odometry_checks.align_max_spread_m, ground_sample_m_};
+}
+
+bool Slam::believable(const ImageAlignment& aligned, double min_correlation, double rest_ratio) const {
+  return clearsBar(aligned, alignmentBar(min_correlation, rest_ratio));
+}
+
+ImageAlignment Slam::alignPair(const ImagePair& images, const std::vector<cv::Matx23d>& starts) const {
+  return alignImages(images.before, images.now, starts, *images.settings, alignmentBar(images.min_correlation, images.rest_ratio));
 }
 
 std::vector<cv::Matx23d> Slam::stepStarts(int steps, bool more_steps) const {
@@ -176,7 +180,7 @@ std::vector<Slam::ImagePair> Slam::imagePairs(const AlignmentImage& reduced_befo
 std::optional<ImageAlignment> Slam::alignFromSteps(const ImagePair& images, int steps, bool more_steps) const {
   const AlignmentImage &before = images.before, &now = images.now;
   const std::vector<cv::Matx23d> starts = stepStarts(steps, more_steps);
-  const ImageAlignment aligned = alignImages(before, now, starts, *images.settings);
+  const ImageAlignment aligned = alignPair(images, starts);
   if (believable(aligned, images.min_correlation, images.rest_ratio)) return aligned;
   // A turn on the spot the steps did not foresee (a sharp turn): started from the turns about the robot's origin
   // that make the images most alike, every 5 degrees, a few at most within 0.1 of the best correlation. Each is
@@ -187,7 +191,7 @@ std::optional<ImageAlignment> Slam::alignFromSteps(const ImagePair& images, int 
   const std::vector<cv::Matx23d> turns = turnCandidates(before, now, cv::Point2d(origin_px->x(), origin_px->y()), 5.0, 0.1);
   constexpr size_t kMostTurns = 4;
   if (turns.empty() || turns.size() > kMostTurns) return std::nullopt;
-  const ImageAlignment turned = alignImages(before, now, turns, *images.settings);
+  const ImageAlignment turned = alignPair(images, turns);
   if (believable(turned, images.min_correlation, images.rest_ratio)) return turned;
   return std::nullopt;
 }
@@ -291,8 +295,11 @@ std::optional<Pose2> Slam::alignedNear(const Pose2& by_spectra, const std::vecto
   for (const ImagePair& images : pairs) {
     if (images.empty()) continue;
     const bool is_reduced = images.settings == &alignment_settings_;
-    if (is_reduced && !reduced) reduced = alignImages(images.before, images.now, start, *images.settings);
-    const ImageAlignment aligned = is_reduced ? *reduced : alignImages(images.before, images.now, start, *images.settings);
+    if (is_reduced && !reduced) {  // judged by the reduced images' lower bar, the stricter one's clearing it too
+      reduced = alignImages(images.before, images.now, start, *images.settings,
+                            alignmentBar(images.min_correlation, config_.odometry_checks.align_rest_ratio));
+    }
+    const ImageAlignment aligned = is_reduced ? *reduced : alignPair(images, start);
     const Pose2 T_prev_curr = groundMotionOf(aligned.W_previous_current);
     if (believable(aligned, images.min_correlation, images.rest_ratio) && withTheSpectra(by_spectra, T_prev_curr, turn_apart_rad) &&
         (!plausible || plausible(T_prev_curr)) && movedTheRobot(T_prev_curr, steps)) {
@@ -376,8 +383,9 @@ Slam::FitCheck Slam::checkedByAlignment(const Pose2& fitted, int inliers, const 
   // what stays still where the fit moves the ground, and at rest nothing does, so the robot's own shadow edge,
   // lens dirt and bumper, which stay still whether or not it moved, pull the alignment to rest as well.
   if (atRest(fitted, used, current)) return check;
-  const ImageAlignment aligned = alignImages(previous_alignment_, alignment, {imageWarpOf(fitted)}, alignment_settings_);
-  if (!believable(aligned, checks.align_min_correlation, checks.align_rest_ratio)) return check;
+  const AlignmentBar bar = alignmentBar(checks.align_min_correlation, checks.align_rest_ratio);
+  const ImageAlignment aligned = alignImages(previous_alignment_, alignment, {imageWarpOf(fitted)}, alignment_settings_, bar);
+  if (!clearsBar(aligned, bar)) return check;
   const Pose2 T_prev_curr = groundMotionOf(aligned.W_previous_current);
   const Pose2 difference = fitted.inverse() * T_prev_curr;
   if (difference.translation().norm() <= checks.align_check_m && std::abs(difference.theta) <= checks.align_check_rad) {
