@@ -530,17 +530,15 @@ TEST(ImageAlignment, AFitAtRestOnAFloorTheRobotsArtifactsOutnumberIsNotConfirmed
   // (their check leaves out what stays still where the fit moves the ground, and at rest nothing): under 30
   // inliers it says `unconfirmed`. Measured without this rule: of 23 + 26 such fits, 20 + 21 said `ok`; with it
   // 25 + 27, none `ok`. (Fits at rest on 30 or more inliers are `ok` once the robot was seen moving: docs/accuracy.md,
-  // Sessions 17 and 28.)
+  // Sessions 17 and 28.) Run on the second floor alone (blobs 12 texels wide), to keep the test's time down.
   int weak_rest = 0, weak_rest_ok = 0, weak_rest_unconfirmed = 0;
-  for (const double blur : {10.0, 12.0}) {
-    for (const FrameResult& r : faintFloorRun(blur)) {
-      if (r.index == 0 || r.odometry.translation().norm() > 0.001 || r.inliers >= 30 || !measuredByOdometry(r.status)) continue;
-      ++weak_rest;  // the robot drove 1 cm
-      weak_rest_ok += r.status == FrameStatus::ok ? 1 : 0;
-      weak_rest_unconfirmed += r.status == FrameStatus::unconfirmed ? 1 : 0;
-    }
+  for (const FrameResult& r : faintFloorRun(12.0)) {
+    if (r.index == 0 || r.odometry.translation().norm() > 0.001 || r.inliers >= 30 || !measuredByOdometry(r.status)) continue;
+    ++weak_rest;  // the robot drove 1 cm
+    weak_rest_ok += r.status == FrameStatus::ok ? 1 : 0;
+    weak_rest_unconfirmed += r.status == FrameStatus::unconfirmed ? 1 : 0;
   }
-  EXPECT_GE(weak_rest, 40);
+  EXPECT_GE(weak_rest, 20);
   EXPECT_EQ(weak_rest_ok, 0);
   EXPECT_EQ(weak_rest_unconfirmed, weak_rest);
 }
@@ -550,7 +548,7 @@ TEST(ImageAlignment, OnAFaintFloorAFitAtRestIsNotOkBeforeTheRobotWasSeenMoving) 
   // robot's shadow edge, lens dirt and bumper lock the fit at rest at the start, before anything has shown what stays
   // still in the image. Until some fit moved its matches, a fit at rest is not `ok`.
   int rest_before_moving = 0, rest_before_moving_ok = 0, strong = 0;
-  for (const double blur : {6.0, 8.0, 10.0}) {
+  for (const double blur : {8.0, 10.0}) {  // blobs 6 texels wide were left out for time: 3 strong fits of 39
     bool moved = false;
     for (const FrameResult& r : faintFloorRun(blur)) {
       if (r.index == 0 || !measuredByOdometry(r.status)) continue;
@@ -563,9 +561,9 @@ TEST(ImageAlignment, OnAFaintFloorAFitAtRestIsNotOkBeforeTheRobotWasSeenMoving) 
       }
     }
   }
-  // Measured: all 3 x 39 fits are at rest (each run locks at rest from its start); 29 of them on 30 or more inliers,
-  // which said `ok` before this rule.
-  EXPECT_GE(rest_before_moving, 100);
+  // Measured: all 2 x 39 fits are at rest (each run locks at rest from its start); 12 + 14 of them on 30 or more
+  // inliers, which said `ok` before this rule.
+  EXPECT_GE(rest_before_moving, 70);
   EXPECT_GE(strong, 20);
   EXPECT_EQ(rest_before_moving_ok, 0);
 }
@@ -673,14 +671,15 @@ TEST(ImageAlignment, OutdoorsOnAFaintFloorMatchesThatAllStayInPlaceAreRefutedByT
   // without / with the check: measured frames at rest 7 + 7 / 1 + 1 (the first frame, before there is a mean of recent
   // images); aligned frames 103 / 112, at rest 1 / 0; still frames 0 / 3, all within 3 mm of the truth. (Before the
   // heading images measured the steps: at rest 43 + 36 / 1 + 1, still frames 0 / 104.)
-  FaintFloorRun without, with;
+  // The run without the check is made on seed 3 alone (7 at rest), to keep the test's time down.
+  const FaintFloorRun without = runFaintFloor(false, 3);
+  FaintFloorRun with;
   for (const std::uint64_t seed : {3u, 4u}) {
-    const FaintFloorRun a = runFaintFloor(false, seed), b = runFaintFloor(true, seed);
-    without.measured_at_rest += a.measured_at_rest, without.aligned_at_rest += a.aligned_at_rest, without.still += a.still;
+    const FaintFloorRun b = runFaintFloor(true, seed);
     with.measured_at_rest += b.measured_at_rest, with.aligned_at_rest += b.aligned_at_rest, with.ok_off += b.ok_off;
     with.still += b.still, with.still_near_truth += b.still_near_truth, with.aligned += b.aligned;
   }
-  EXPECT_GE(without.measured_at_rest, 10);
+  EXPECT_GE(without.measured_at_rest, 5);
   EXPECT_EQ(without.still, 0);
   EXPECT_LE(with.measured_at_rest, 2);
   EXPECT_EQ(with.aligned_at_rest, 0);
@@ -700,10 +699,11 @@ TEST(ImageAlignment, OnAFaintFloorTheImagesMeasureTheStepsNeitherLeavingTheRobot
   // Their turns are not short: the heading images less the mean of the recent ones (what stays in the image) turn
   // -0.006 degrees from the truth on average, where without taking it away they turned -0.020 (seeds 3 and 6: -0.023
   // and -0.017) of the 3.6 degrees a frame.
-  int aligned_off_without = 0, aligned_off_with = 0, aligned_with = 0;
+  // The run without the rule is made on seed 3 alone (10 off), to keep the test's time down.
+  const int aligned_off_without = runFaintFloor(true, 3, 5.0, 0.0, sim::PathKind::loop, 100).aligned_off;
+  int aligned_off_with = 0, aligned_with = 0;
   double turn_error_rad = 0.0;
   for (const std::uint64_t seed : {3u, 6u}) {
-    aligned_off_without += runFaintFloor(true, seed, 5.0, 0.0, sim::PathKind::loop, 100).aligned_off;
     const FaintFloorRun with = runFaintFloor(true, seed, 5.0, 0.5, sim::PathKind::loop, 100);
     aligned_off_with += with.aligned_off;
     aligned_with += with.aligned;
