@@ -125,6 +125,34 @@ TEST(ImageAlignment, AKnownRigidWarpIsRecoveredFromAStartAFewPixelsOff) {
   EXPECT_LT(aligned.spread_px, 0.2);
 }
 
+TEST(ImageAlignment, ASolutionIsProbedOnlyWhereItCanClearTheBarItIsJudgedBy) {
+  const cv::Matx23d truth = rigidWarp(3.0 * kDeg, 14.0, -6.0);
+  const auto [previous, current] = twoViews(truth, false);
+  const ImageAlignmentSettings settings;
+  const AlignmentImage p = alignmentImage(previous, settings), c = alignmentImage(current, settings);
+  const std::vector<cv::Matx23d> start = {rigidWarp(2.0 * kDeg, 11.0, -3.0)};
+  const ImageAlignment probed = alignImages(p, c, start, settings);
+  ASSERT_TRUE(probed.converged);
+  ASSERT_GT(probed.correlation, 0.95);
+  ASSERT_GT(probed.spread_px, 0.0);
+  // A bar its correlations clear: probed as without one, the very same result; cleared where the spread allows.
+  const AlignmentBar clearable{0.9, 2.0, 0.001, 0.0005};  // 1 mm at 0.5 mm a pixel: 2 pixels of spread
+  const ImageAlignment judged = alignImages(p, c, start, settings, clearable);
+  EXPECT_EQ(judged.W_previous_current, probed.W_previous_current);
+  EXPECT_EQ(judged.spread_px, probed.spread_px);
+  EXPECT_TRUE(clearsBar(judged, clearable));
+  AlignmentBar tight = clearable;
+  tight.max_spread_m = 0.1 * probed.spread_px * tight.metres_per_px;  // a tenth of the spread the probes show
+  EXPECT_FALSE(clearsBar(alignImages(p, c, start, settings, tight), tight));
+  // A bar its correlation cannot clear: the same solution, not probed (spread infinite), and not believed.
+  const AlignmentBar unclearable{0.999, 2.0, 0.001, 0.0005};
+  const ImageAlignment refused = alignImages(p, c, start, settings, unclearable);
+  EXPECT_EQ(refused.W_previous_current, probed.W_previous_current);
+  EXPECT_EQ(refused.correlation, probed.correlation);
+  EXPECT_TRUE(std::isinf(refused.spread_px));
+  EXPECT_FALSE(clearsBar(refused, unclearable));
+}
+
 TEST(ImageAlignment, ASharpShadowFixedInTheImageDoesNotPullTheWarpToRest) {
   // The shadow's edge, the strongest edge of both images, stays put: aligned, it says "no motion".
   const cv::Matx23d truth = rigidWarp(-2.0 * kDeg, 16.0, 5.0);
