@@ -86,7 +86,7 @@ cv::Mat movingPixels(const cv::Mat& previous, const cv::Mat& moved_previous, con
 /// pixels, current to previous); the one of highest correlation, probed from settings.probe_px around it. The
 /// first start is the expected motion that still parts are told by (movingPixels). Starts that end elsewhere are
 /// rivals (rival_correlation).
-/// The probes, most of the cost, are run only for a solution that clears `bar` by its correlations, and stop at the
+/// The probes (four more alignments) are run only for a solution that clears `bar` by its correlations, and stop at the
 /// first that ends farther than the bar allows: a solution that cannot clear it has spread_px infinite (not probed)
 /// or that probe's distance, so clearsBar(result, bar) is what it would be with every probe run.
 ImageAlignment alignImages(const AlignmentImage& previous, const AlignmentImage& current, const std::vector<cv::Matx23d>& starts,
