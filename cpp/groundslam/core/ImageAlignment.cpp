@@ -217,11 +217,17 @@ ImageAlignment alignImages(const AlignmentImage& previous, const AlignmentImage&
   const cv::Mat& current_ground = ground.current;
   const cv::Mat& moving = ground.moving;
 
-  std::vector<std::pair<cv::Matx23d, double>> solutions;
-  for (const cv::Matx23d& start : starts) {
-    if (auto solution = eccFrom(previous_ground, current_ground, moving, toReducedPixels(start, previous.scale), settings.max_iterations)) {
-      solutions.push_back(*solution);
+  // The starts are aligned side by side (each run is independent; OpenCV's threads), then taken in their order.
+  std::vector<std::optional<std::pair<cv::Matx23d, double>>> ended(starts.size());
+  cv::parallel_for_(cv::Range(0, static_cast<int>(starts.size())), [&](const cv::Range& range) {
+    for (int i = range.start; i < range.end; ++i) {
+      const size_t k = static_cast<size_t>(i);
+      ended[k] = eccFrom(previous_ground, current_ground, moving, toReducedPixels(starts[k], previous.scale), settings.max_iterations);
     }
+  });
+  std::vector<std::pair<cv::Matx23d, double>> solutions;
+  for (const auto& solution : ended) {
+    if (solution) solutions.push_back(*solution);
   }
   if (solutions.empty()) return best;
   const auto winner = std::max_element(solutions.begin(), solutions.end(), [](const auto& a, const auto& b) { return a.second < b.second; });
