@@ -5,13 +5,14 @@
 build=$1
 list=$2
 labelled=$(ctest --test-dir "$build" -N -L long | sed -n 's/^ *Test *#[0-9]*: //p')
+mapfile -t names < <(sed -n 's/^  \([A-Za-z0-9_]*\.[A-Za-z0-9_]*\)$/\1/p' "$list")
+listed=${#names[@]}
 missing=0
-while read -r name; do
+for name in "${names[@]}"; do
   if ! grep -qxF "$name" <<< "$labelled"; then
     echo "FAIL $name is listed in $list but no test of that name is labelled long"
     missing=$((missing + 1))
   fi
-done < <(sed -n 's/^  \([A-Za-z0-9_]*\.[A-Za-z0-9_]*\)$/\1/p' "$list")
-listed=$(sed -n 's/^  \([A-Za-z0-9_]*\.[A-Za-z0-9_]*\)$/\1/p' "$list" | wc -l)
+done
 echo "$listed listed, $missing not labelled"
 [ "$listed" -gt 0 ] && [ "$missing" -eq 0 ]
