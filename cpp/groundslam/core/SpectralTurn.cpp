@@ -77,16 +77,8 @@ SpectralTurn spectralTurn(const cv::Mat& previous, const cv::Mat& current, const
     const int apart = std::min(std::abs(k - best), s.angle_bins - std::abs(k - best));
     if (apart >= exclusion) runner_up = std::max(runner_up, summed.at<double>(0, k));
   }
-  // The correlation is sampled every angle bin; its peak, several bins wide (the spectra vary slowly with the angle at
-  // the lowest frequencies), lies between the samples where the parabola through the best one and its two neighbours
-  // has its top.
-  const double before = summed.at<double>(0, (best + s.angle_bins - 1) % s.angle_bins);
-  const double after = summed.at<double>(0, (best + 1) % s.angle_bins);
-  const double curvature = before - 2.0 * peak + after;
-  const double offset = curvature < 0.0 ? std::clamp(0.5 * (before - after) / curvature, -0.5, 0.5) : 0.0;
-  double turn = M_PI * (best + offset) / s.angle_bins;
+  double turn = M_PI * best / s.angle_bins;
   if (turn > 0.5 * M_PI) turn -= M_PI;
-  if (turn <= -0.5 * M_PI) turn += M_PI;
   result.turn_rad = turn;
   result.peak_ratio = runner_up > 0.0 ? peak / runner_up : std::numeric_limits<double>::infinity();
   return result;

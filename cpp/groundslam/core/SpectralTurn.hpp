@@ -18,7 +18,7 @@ struct SpectralTurnSettings {
 
 struct SpectralTurn {
   /// `current` is `previous` turned counterclockwise as displayed (x right, y down) by this, or by it plus half a
-  /// turn; in (-pi/2, pi/2]. Measured between the angle bins (the correlation's peak interpolated).
+  /// turn; in (-pi/2, pi/2].
   double turn_rad = 0.0;
   /// How much better the best turn explains the spectra than the best turn peak_exclusion_deg or more away (>= 1;
   /// infinity when no other turn correlates at all; 0 when nothing does).
