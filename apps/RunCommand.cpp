@@ -126,6 +126,7 @@ RunProgress runInto(const std::string& folder, const RunOptions& o, const Datase
     std::cout << metricsToText(metrics) << loopMetricsToText(loops);
   }
   writeNewFile(file("candidates.csv"), formatCandidatesCsv(slam.loopCandidates(), truths));
+  if (config.loop_closure.enabled) writeNewFile(file("relocalizations.csv"), formatRelocalizationsCsv(slam.relocalizationAttempts()));
   writeNewFile(file("trajectory.tum"), formatTum(trajectory));
   writeNewFile(file("run.yaml"), runStatusYaml("run", progress.processed, progress.total, o.dataset,
                                                   config.loop_closure.enabled ? vocabularyPath(settings.inputs) : ""));  // last: its status says whether the run finished

@@ -7,6 +7,7 @@
 #include "groundslam/io/Dataset.hpp"
 #include "groundslam/io/Files.hpp"
 #include "groundslam/io/InputError.hpp"
+#include "groundslam/io/RunFiles.hpp"
 #include "groundslam/io/TextParsing.hpp"
 #include "groundslam/io/Tum.hpp"
 
@@ -172,4 +173,29 @@ TEST(Timestamps, TimestampsFileWinsAndIsChecked) {
   EXPECT_NE(inputErrorOf([&] { openDataset(dir.string()); }).find("timestamps.txt:3: timestamps must increase"), std::string::npos);
   writeText(dir / "timestamps.txt", "12.5\n12.75 1\n13\n");
   EXPECT_NE(inputErrorOf([&] { openDataset(dir.string()); }).find("timestamps.txt:2: expected one timestamp"), std::string::npos);
+}
+
+TEST(RunFiles, RelocalizationsCsvSaysWhyEachLocalizationFailedAndWhatCameOfIt) {
+  RelocalizationAttempt off_the_map;  // no peak verified: no pose
+  off_the_map.frame = 46;
+  off_the_map.localization.votes = 5;
+  RelocalizationAttempt repeated;
+  repeated.frame = 47;
+  repeated.localization.status = LocalizationStatus::ambiguous;
+  repeated.localization.T_map_robot = Pose2(0.125, -0.5, 0.25);
+  repeated.localization.votes = 68;
+  repeated.localization.runner_up_votes = 62;
+  repeated.localization.inliers = 429;
+  repeated.localization.strong_inliers = 191;
+  repeated.localization.runner_up_inliers = 396;
+  RelocalizationAttempt found = repeated;
+  found.frame = 52;
+  found.localization.status = LocalizationStatus::localized;
+  found.outcome = RelocalizationOutcome::joined;
+  EXPECT_EQ(formatRelocalizationsCsv({off_the_map, repeated, found}),
+            "frame,status,outcome,x,y,theta,votes,runner_up_votes,inliers,strong_inliers,runner_up_inliers\n"
+            "46,too_few_votes,not_localized,,,,5,0,0,0,0\n"
+            "47,ambiguous,not_localized,0.125000000,-0.500000000,0.250000000,68,62,429,191,396\n"
+            "52,localized,joined,0.125000000,-0.500000000,0.250000000,68,62,429,191,396\n");
+  EXPECT_EQ(formatRelocalizationsCsv({}), "frame,status,outcome,x,y,theta,votes,runner_up_votes,inliers,strong_inliers,runner_up_inliers\n");
 }

@@ -109,6 +109,10 @@ TEST(EndToEnd, LoopClosureBeatsOdometryOnALoopDrivenTwice) {
   // The odometry-only run verifies no candidates.
   const std::string none = readTextFile((dir / "odometry" / "loop_closures.csv").string());
   EXPECT_EQ(std::count(none.begin(), none.end(), '\n'), 1);
+  // Never lost: no global localization to record; without loop closure, no record at all.
+  EXPECT_EQ(readTextFile((dir / "slam" / "relocalizations.csv").string()),
+            "frame,status,outcome,x,y,theta,votes,runner_up_votes,inliers,strong_inliers,runner_up_inliers\n");
+  EXPECT_FALSE(std::filesystem::exists(dir / "odometry" / "relocalizations.csv"));
 
   // `evaluate RUN_DIR` recomputes the loop-closure figures from the run's files.
   ASSERT_EQ(runCli("evaluate " + (dir / "slam").string() + " --json " + (dir / "again.json").string()), 0);

@@ -190,8 +190,10 @@ TEST(Relocalization, AKidnappedRobotRelocalizesAndTheGapSnapsIntoPlace) {
   Trajectory truth;
   int relocalized_at = -1, lost = 0;
   std::string landing_status;  // frame 330's, the first after the gap
+  std::vector<int> processed;  // the simulator's frame of each frame Slam saw
   for (int i = 0; i < simulator.frameCount(); ++i) {
     if (i >= 250 && i < 330) continue;
+    processed.push_back(i);
     const FrameResult r = slam.process(simulator.renderFrame(i), static_cast<double>(i));
     truth.push_back({static_cast<double>(i), simulator.groundTruth()[static_cast<size_t>(i)]});
     if (i == 330) landing_status = r.statusName();
@@ -204,6 +206,19 @@ TEST(Relocalization, AKidnappedRobotRelocalizesAndTheGapSnapsIntoPlace) {
   EXPECT_EQ(landing_status.rfind("lost_too_few_", 0), 0u) << landing_status;
   ASSERT_GE(relocalized_at, 330);
   EXPECT_LE(relocalized_at, 335);  // within 5 frames of landing on mapped ground
+  // relocalizations.csv's record: each lost frame's localization; the last joined the map, at the frame that said
+  // relocalized, where the truth is (the map frame is the first pose's).
+  const std::vector<RelocalizationAttempt>& attempts = slam.relocalizationAttempts();
+  ASSERT_FALSE(attempts.empty());
+  for (const RelocalizationAttempt& a : attempts) EXPECT_GE(processed.at(static_cast<size_t>(a.frame)), 330);
+  const RelocalizationAttempt& last = attempts.back();
+  EXPECT_EQ(last.outcome, RelocalizationOutcome::joined);
+  EXPECT_EQ(last.localization.status, LocalizationStatus::localized);
+  const int last_frame = processed.at(static_cast<size_t>(last.frame));
+  EXPECT_EQ(last_frame, relocalized_at);
+  const Pose2 true_pose = between(simulator.groundTruth()[0], simulator.groundTruth()[static_cast<size_t>(last_frame)]);
+  EXPECT_LT((last.localization.T_map_robot.translation() - true_pose.translation()).norm(), 0.01);
+  EXPECT_LT(std::abs(wrapAngle(last.localization.T_map_robot.theta - true_pose.theta)), 1.0 * M_PI / 180.0);
   const TrajectoryMetrics m = evaluateTrajectory(truth, slam.trajectory()).metrics;
   EXPECT_EQ(m.measured_frames, m.groundtruth_frames);
   EXPECT_LT(m.ate_rmse_m, 0.005);

@@ -25,6 +25,24 @@ std::string formatLoopClosuresCsv(const std::vector<LoopCandidate>& candidates) 
   return csv;
 }
 
+std::string formatRelocalizationsCsv(const std::vector<RelocalizationAttempt>& attempts) {
+  std::string csv = "frame,status,outcome,x,y,theta,votes,runner_up_votes,inliers,strong_inliers,runner_up_inliers\n";
+  char row[256];
+  for (const RelocalizationAttempt& a : attempts) {
+    const Localization& l = a.localization;
+    csv += std::to_string(a.frame) + "," + localizationStatusName(l.status) + "," + relocalizationOutcomeName(a.outcome);
+    if (l.status == LocalizationStatus::too_few_votes) {
+      csv += ",,,";
+    } else {
+      std::snprintf(row, sizeof(row), ",%.9f,%.9f,%.9f", l.T_map_robot.x, l.T_map_robot.y, l.T_map_robot.theta);
+      csv += row;
+    }
+    std::snprintf(row, sizeof(row), ",%d,%d,%d,%d,%d\n", l.votes, l.runner_up_votes, l.inliers, l.strong_inliers, l.runner_up_inliers);
+    csv += row;
+  }
+  return csv;
+}
+
 std::string formatCandidatesCsv(const std::vector<LoopCandidate>& candidates,
                                 const std::vector<std::optional<CandidateTruth>>& truths) {
   const bool with_truth = !truths.empty();

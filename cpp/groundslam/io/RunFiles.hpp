@@ -23,6 +23,13 @@ std::string formatCandidatesCsv(const std::vector<LoopCandidate>& candidates,
 /// Reads the candidates back (scores, gate, transform). Throws InputError naming file and line.
 std::vector<LoopCandidate> readCandidatesCsv(const std::string& path);
 
+/// `relocalizations.csv`: every global localization of a lost frame, in order:
+/// frame,status,outcome,x,y,theta,votes,runner_up_votes,inliers,strong_inliers,runner_up_inliers. `status` is the
+/// localizer's answer (localized, or why not: too_few_votes, ambiguous, too_few_inliers, covariance, clustered),
+/// `outcome` what came of it (joined, pending, on_a_keyframe, not_localized, joined_nearby); (x, y, theta) the pose
+/// found in the map frame, empty when no peak was verified (too_few_votes).
+std::string formatRelocalizationsCsv(const std::vector<RelocalizationAttempt>& attempts);
+
 /// Marks the poses of frames whose `frames.csv` status is a fallback as not measured (paired by timestamp).
 /// Throws InputError naming file and line.
 void markUnmeasuredPoses(const std::string& frames_csv_path, Trajectory& trajectory);

@@ -62,7 +62,8 @@ void renameOrThrow(const fs::path& from, const fs::path& to) {
 const std::vector<std::string>& RunFolder::resultNames() {
   static const std::vector<std::string> names = {
       "run.yaml", "config.yaml", "trajectory.tum", "groundtruth.tum", "frames.csv", "metrics.json", "loop_closures.csv",
-      "candidates.csv", "graph.g2o", "map.gsmap", "localizations.csv", "localized.tum", "report.html", "report", "odometry"};
+      "candidates.csv", "relocalizations.csv", "graph.g2o", "map.gsmap", "localizations.csv", "localized.tum",
+      "report.html", "report", "odometry"};
   return names;
 }
 

@@ -45,6 +45,17 @@ const char* loopGateName(LoopGate gate) {
   return "unknown";
 }
 
+const char* relocalizationOutcomeName(RelocalizationOutcome outcome) {
+  switch (outcome) {
+    case RelocalizationOutcome::joined: return "joined";
+    case RelocalizationOutcome::pending: return "pending";
+    case RelocalizationOutcome::on_a_keyframe: return "on_a_keyframe";
+    case RelocalizationOutcome::not_localized: return "not_localized";
+    case RelocalizationOutcome::joined_nearby: return "joined_nearby";
+  }
+  return "unknown";
+}
+
 LoopCloser::LoopCloser(const LoopClosureSettings& settings, std::shared_ptr<const Vocabulary> vocabulary,
                        const MatcherSettings& matching, const FitSettings& fitting, const LocalizationSettings& localization)
     : settings_(settings),
@@ -347,22 +358,34 @@ std::vector<LoopCandidate> LoopCloser::relocalize(int frame, const GroundFeature
   AnchorFilter usable(feature_map_.anchors().size());
   for (size_t a = 0; a < usable.size(); ++a) usable[a] = feature_map_.anchors()[a].segment == kMapSegment;
   const Localization localization = localizeOnMap(features, usable);
-  if (!localization.ok() || onAnAnchorsPose(localization)) return rejoinNearby(frame, features, estimates);
+  const auto record = [&](RelocalizationOutcome outcome) { relocalization_attempts_.push_back({frame, localization, outcome}); };
+  if (!localization.ok() || onAnAnchorsPose(localization)) {
+    std::vector<LoopCandidate> nearby = rejoinNearby(frame, features, estimates);
+    record(!nearby.empty()        ? RelocalizationOutcome::joined_nearby
+           : localization.ok()    ? RelocalizationOutcome::on_a_keyframe
+                                  : RelocalizationOutcome::not_localized);
+    return nearby;
+  }
   // One localization could be a lookalike; the next must agree with what odometry measured in between.
   PendingLocalization current{frame, localization, features};
   if (!pending_localization_ || segmentOf(pending_localization_->frame) != lost_segment ||
       !agreeWithOdometry(*pending_localization_, current, estimates)) {
     pending_localization_ = std::move(current);
+    record(RelocalizationOutcome::pending);
     return {};
   }
   // Agreeing, but too near on a repeating floor: the earlier waits for a frame further on to confirm it.
-  if (!farEnoughApart(pending_localization_->frame, frame, estimates)) return {};
+  if (!farEnoughApart(pending_localization_->frame, frame, estimates)) {
+    record(RelocalizationOutcome::pending);
+    return {};
+  }
   const PendingLocalization earlier = std::move(*pending_localization_);
   pending_localization_.reset();
   joinSegments(lost_segment, kMapSegment);
   std::vector<LoopCandidate> joined = {edgeOf(earlier), edgeOf(current)};
   recent_loops_.emplace_back(joined.back().frame_a, frame);
   if (recent_loops_.size() > kRecentLoops) recent_loops_.pop_front();
+  record(RelocalizationOutcome::joined);
   return joined;
 }
 

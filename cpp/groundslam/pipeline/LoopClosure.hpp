@@ -103,6 +103,21 @@ struct LoopCandidate {
   bool accepted() const { return rejected_by == LoopGate::none; }
 };
 
+/// What came of a lost frame's global localization (LoopCloser::relocalize): the segment joined the map with it;
+/// it waits for the next localization to confirm it (or it replaced one that the odometry since did not confirm);
+/// it put the frame on a map keyframe's own pose (what stays in the image; refused); it failed (the status says why);
+/// it failed but the map's places near the frame's estimate joined the segment (LoopClosureSettings::lost_reach_m).
+enum class RelocalizationOutcome { joined, pending, on_a_keyframe, not_localized, joined_nearby };
+const char* relocalizationOutcomeName(RelocalizationOutcome outcome);
+
+/// One lost frame's global localization on the map and what came of it: where a robot never relocalizes, these say
+/// why (e.g. `ambiguous` on a floor that repeats, `too_few_votes` off the mapped ground).
+struct RelocalizationAttempt {
+  int frame = 0;  ///< as LoopCandidate's frames
+  Localization localization;
+  RelocalizationOutcome outcome = RelocalizationOutcome::not_localized;
+};
+
 class LoopCloser {
  public:
   LoopCloser(const LoopClosureSettings& settings, std::shared_ptr<const Vocabulary> vocabulary,
@@ -161,6 +176,8 @@ class LoopCloser {
   void loopRescued(const LoopCandidate& candidate);
   const PlaceMap& places() const { return places_; }
   const FeatureMap& featureMap() const { return feature_map_; }
+  /// Every global localization of a lost frame so far (relocalize), in order.
+  const std::vector<RelocalizationAttempt>& relocalizationAttempts() const { return relocalization_attempts_; }
 
  private:
   /// A frame waiting its k frames before it may become a place.
@@ -233,6 +250,7 @@ class LoopCloser {
   std::vector<int> unsure_motions_;    ///< motions that may be a repetition off, up to each frame (motionUnsure)
   bool next_motion_unsure_ = false;
   std::deque<std::pair<int, int>> recent_loops_;  ///< (frame_a, frame_b) of the latest accepted loop closures
+  std::vector<RelocalizationAttempt> relocalization_attempts_;
 };
 
 }  // namespace groundslam

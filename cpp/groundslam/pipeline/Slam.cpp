@@ -354,6 +354,11 @@ void Slam::restartMap(const OdometryEdge& failed) {
   map_start_ = to;
 }
 
+const std::vector<RelocalizationAttempt>& Slam::relocalizationAttempts() const {
+  static const std::vector<RelocalizationAttempt> none;
+  return loop_closer_ ? loop_closer_->relocalizationAttempts() : none;
+}
+
 void Slam::relocalize(const Keyframe& current, FrameResult& result) {
   StageTimer timer;
   const std::vector<LoopCandidate> joined = loop_closer_->relocalize(current.index, current.features, graph_.poses());

@@ -111,6 +111,8 @@ class Slam {
   /// Every loop-closure candidate verified so far, accepted or not (frames as in FrameResult::index); empty
   /// when an observer took them without keeping them.
   const std::vector<LoopCandidate>& loopCandidates() const { return candidates_; }
+  /// Every global localization of a lost frame so far and what came of it (empty without loop closure).
+  const std::vector<RelocalizationAttempt>& relocalizationAttempts() const;
   /// Each verified candidate goes to `observer` as it is decided (a long-running program can write or count
   /// them as they come); with `keep` false Slam no longer stores them, so memory does not grow with them.
   void setCandidateObserver(std::function<void(const LoopCandidate&)> observer, bool keep);
