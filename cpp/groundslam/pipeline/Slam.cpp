@@ -82,7 +82,9 @@ FrameResult Slam::process(PreparedFrame prepared) {
   // §III-B: match to the previous image, fit T_prev_curr with a robust M-estimator (eqs. 5-6), add the edge.
   if (previous_) {
     OdometryEdge odometry = estimateOdometry(*previous_, current, prepared, result);
-    if (odometry.fallback && !odometry.turn_measured) turnBySpectra(odometry, prepared.turn);
+    if (odometry.fallback && !odometry.turn_measured && !motionBySpectraAssumed(odometry, current, prepared)) {
+      turnBySpectra(odometry, prepared.turn);
+    }
     // Not in the paper: every match in place while the images show the ground moving is the robot's own artifacts.
     if (auto moving = restRefuted(*previous_, current, odometry, prepared)) odometry = std::move(*moving);
     // Not in the paper: too few matches among all features after frames dropped; the spectra show where to look.

@@ -335,6 +335,9 @@ class Slam {
   std::optional<double> measuredTurn(const RigidEstimate& refused) const;
   /// A turn of the robot over a turn of its images (-1: the camera sees the ground mirrored).
   static double imageTurnSign(const CameraModel& camera, const CameraIntrinsics& intrinsics);
+  /// A failed frame's whole motion from the images' spectra, where they register the two images on a floor that does
+  /// not repeat (FallbackSettings::motion_by_spectra); whether it was.
+  bool motionBySpectraAssumed(OdometryEdge& failed, const Keyframe& current, const PreparedFrame& prepared) const;
   /// A failed frame's turn from the images' spectra, where they clearly tell it (FallbackSettings::turn_*).
   void turnBySpectra(OdometryEdge& failed, const cv::Mat& turn_image) const;
   /// The mean of the recent turn images, which turnBySpectra takes away: what stays in the image.

@@ -23,6 +23,17 @@ double Slam::imageTurnSign(const CameraModel& camera, const CameraIntrinsics& k)
   return J.determinant() < 0.0 ? -1.0 : 1.0;
 }
 
+bool Slam::motionBySpectraAssumed(OdometryEdge& failed, const Keyframe& current, const PreparedFrame& prepared) const {
+  // The registration a bridge makes (motionBySpectra): the turn, then a clear phase correlation peak at a shift of the
+  // ground once it is undone. Where the floor repeats, that shift may be a repetition off: the turn alone is taken.
+  if (!config_.fallback.motion_by_spectra || repetitionShown(current.index) || floor_looks_repeated_) return false;
+  const auto registered = motionBySpectra(previous_turn_image_, prepared.turn, prepared.turn_scale);
+  if (!registered) return false;
+  failed.T_prev_curr = registered->T_tracked_current;
+  failed.turn_measured = true;
+  return true;
+}
+
 void Slam::turnBySpectra(OdometryEdge& failed, const cv::Mat& turn_image) const {
   const FallbackSettings& f = config_.fallback;
   if (f.turn_image_width_px <= 0 || turn_image.empty() || previous_turn_image_.size() != turn_image.size() ||
